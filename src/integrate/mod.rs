@@ -1,0 +1,113 @@
+//! Integration layer: the rod state, the Cosserat ODE right-hand side written once
+//! over any [`Real`] scalar, and the two steppers (fixed RK4, adaptive DP5(4)).
+
+mod steppers;
+
+pub use steppers::{dp45_step, rk4_step, Dp45Outcome, ErrScale};
+
+use crate::math::{skew, Real};
+use nalgebra::{Matrix3, Vector3};
+
+/// Backbone state at one arc length, all in the world frame:
+/// position `r`, orientation `R`, internal force `n` and internal moment `m`
+/// (the force/moment the distal part exerts on the proximal part, thesis 2.7).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct State<T: Real> {
+    /// Position `r(s)` (m).
+    pub r: Vector3<T>,
+    /// Orientation `R(s)`: columns are the local axes in world coordinates.
+    pub rot: Matrix3<T>,
+    /// Internal force `n(s)` (N).
+    pub n: Vector3<T>,
+    /// Internal moment `m(s)` (N m).
+    pub m: Vector3<T>,
+}
+
+impl<T: Real> State<T> {
+    /// `self + h k` for a derivative `k`.
+    #[inline(always)]
+    pub fn add_scaled(&self, k: &State<T>, h: f64) -> State<T> {
+        State {
+            r: self.r + k.r.map(|x| x.scale(h)),
+            rot: self.rot + k.rot.map(|x| x.scale(h)),
+            n: self.n + k.n.map(|x| x.scale(h)),
+            m: self.m + k.m.map(|x| x.scale(h)),
+        }
+    }
+    /// Value parts as plain `f64`.
+    pub fn value(&self) -> State<f64> {
+        State {
+            r: self.r.map(|x| x.re()),
+            rot: self.rot.map(|x| x.re()),
+            n: self.n.map(|x| x.re()),
+            m: self.m.map(|x| x.re()),
+        }
+    }
+    /// True when every value part is finite.
+    pub fn is_finite(&self) -> bool {
+        self.r.iter().all(|x| x.re().is_finite())
+            && self.rot.iter().all(|x| x.re().is_finite())
+            && self.n.iter().all(|x| x.re().is_finite())
+            && self.m.iter().all(|x| x.re().is_finite())
+    }
+}
+
+/// Coefficients of the ODE on one interval (constant between events).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coeffs {
+    /// `C^-1` diagonal (1 / (N m^2)).
+    pub inv_c: Vector3<f64>,
+    /// `D^-1` diagonal (1 / N); unused for a Kirchhoff rod.
+    pub inv_d: Vector3<f64>,
+    /// Precurvature `u*` (1/m).
+    pub u_star: Vector3<f64>,
+    /// Distributed force per unit length `f` (N/m), world frame (gravity times linear density).
+    pub f: Vector3<f64>,
+    /// `true`: Kirchhoff rod, `v = e3`.
+    pub kirchhoff: bool,
+}
+
+#[inline(always)]
+fn cmul<T: Real>(a: &Vector3<T>, k: &Vector3<f64>) -> Vector3<T> {
+    Vector3::new(a.x.scale(k.x), a.y.scale(k.y), a.z.scale(k.z))
+}
+
+/// Right-hand side of the rod ODE.
+///
+/// Symbols (thesis chapter II): `v = D^-1 R^T n + e3` (eq. 2.10, `v* = e3`),
+/// `u = C^-1 R^T m + u*` (eq. 2.12 inverted), `r' = R v` (eq. 2.3), `R' = R u^`
+/// (eq. 2.4), `n' = -f` (eq. 2.6 differentiated), `m' = -r' x n` (eq. 2.11
+/// differentiated, no distributed moment `l`). Eq. 2.13 is the same law written for
+/// `u'`; carrying `m` instead makes stiffness jumps between sections automatic
+/// (`u+ = C+^-1 (C- (u- - u-*) - R^T tau) + u+*`, section 3.5 generalised).
+#[inline(always)]
+pub fn rhs<T: Real>(y: &State<T>, c: &Coeffs) -> State<T> {
+    let rt = y.rot.transpose();
+    let v = if c.kirchhoff {
+        Vector3::new(T::zero(), T::zero(), T::one())
+    } else {
+        let mut v = cmul(&(rt * y.n), &c.inv_d);
+        v.z += T::one();
+        v
+    };
+    let u = cmul(&(rt * y.m), &c.inv_c) + c.u_star.map(T::cst);
+    let rdot = y.rot * v;
+    State {
+        r: rdot,
+        rot: y.rot * skew(&u),
+        n: -c.f.map(T::cst),
+        m: -rdot.cross(&y.n),
+    }
+}
+
+/// The strains `(v, u)` at a state, in the local frame.
+pub fn strains(y: &State<f64>, c: &Coeffs) -> (Vector3<f64>, Vector3<f64>) {
+    let rt = y.rot.transpose();
+    let v = if c.kirchhoff {
+        Vector3::z()
+    } else {
+        (rt * y.n).component_mul(&c.inv_d) + Vector3::z()
+    };
+    let u = (rt * y.m).component_mul(&c.inv_c) + c.u_star;
+    (v, u)
+}

@@ -1,0 +1,139 @@
+//! One step of classical RK4 and of Dormand-Prince 5(4) on a [`State`].
+
+use super::{rhs, Coeffs, State};
+use crate::math::{orthonormalize, Real};
+
+/// One classical RK4 step of length `h`; `R` is re-orthonormalised afterwards
+/// (a Newton-Schulz step, exact for dual numbers). Four RHS evaluations.
+#[inline]
+pub fn rk4_step<T: Real>(y: &State<T>, h: f64, c: &Coeffs) -> State<T> {
+    let k1 = rhs(y, c);
+    let k2 = rhs(&y.add_scaled(&k1, 0.5 * h), c);
+    let k3 = rhs(&y.add_scaled(&k2, 0.5 * h), c);
+    let k4 = rhs(&y.add_scaled(&k3, h), c);
+    let mut out = y.add_scaled(&k1, h / 6.0);
+    out = out.add_scaled(&k2, h / 3.0);
+    out = out.add_scaled(&k3, h / 3.0);
+    out = out.add_scaled(&k4, h / 6.0);
+    out.rot = orthonormalize(&out.rot);
+    out
+}
+
+/// Result of one attempted DP5(4) step.
+pub struct Dp45Outcome<T: Real> {
+    /// Fifth-order solution at `s + h`.
+    pub y: State<T>,
+    /// Scaled error estimate (accept when <= 1).
+    pub err: f64,
+}
+
+/// Scales that make the state components comparable in the error norm.
+#[derive(Clone, Copy, Debug)]
+pub struct ErrScale {
+    /// Length scale (m).
+    pub length: f64,
+    /// Force scale (N).
+    pub force: f64,
+    /// Moment scale (N m).
+    pub moment: f64,
+}
+
+/// One Dormand-Prince 5(4) step (7 RHS evaluations); error measured on value parts,
+/// scaled by `scale`, relative to `tol`.
+pub fn dp45_step<T: Real>(
+    y: &State<T>,
+    h: f64,
+    c: &Coeffs,
+    tol: f64,
+    scale: &ErrScale,
+) -> Dp45Outcome<T> {
+    const A21: f64 = 1.0 / 5.0;
+    const A31: f64 = 3.0 / 40.0;
+    const A32: f64 = 9.0 / 40.0;
+    const A41: f64 = 44.0 / 45.0;
+    const A42: f64 = -56.0 / 15.0;
+    const A43: f64 = 32.0 / 9.0;
+    const A51: f64 = 19372.0 / 6561.0;
+    const A52: f64 = -25360.0 / 2187.0;
+    const A53: f64 = 64448.0 / 6561.0;
+    const A54: f64 = -212.0 / 729.0;
+    const A61: f64 = 9017.0 / 3168.0;
+    const A62: f64 = -355.0 / 33.0;
+    const A63: f64 = 46732.0 / 5247.0;
+    const A64: f64 = 49.0 / 176.0;
+    const A65: f64 = -5103.0 / 18656.0;
+    const B1: f64 = 35.0 / 384.0;
+    const B3: f64 = 500.0 / 1113.0;
+    const B4: f64 = 125.0 / 192.0;
+    const B5: f64 = -2187.0 / 6784.0;
+    const B6: f64 = 11.0 / 84.0;
+    // error coefficients b - b*
+    const E1: f64 = 71.0 / 57600.0;
+    const E3: f64 = -71.0 / 16695.0;
+    const E4: f64 = 71.0 / 1920.0;
+    const E5: f64 = -17253.0 / 339200.0;
+    const E6: f64 = 22.0 / 525.0;
+    const E7: f64 = -1.0 / 40.0;
+
+    let k1 = rhs(y, c);
+    let k2 = rhs(&y.add_scaled(&k1, h * A21), c);
+    let k3 = rhs(&y.add_scaled(&k1, h * A31).add_scaled(&k2, h * A32), c);
+    let k4 = rhs(
+        &y.add_scaled(&k1, h * A41)
+            .add_scaled(&k2, h * A42)
+            .add_scaled(&k3, h * A43),
+        c,
+    );
+    let k5 = rhs(
+        &y.add_scaled(&k1, h * A51)
+            .add_scaled(&k2, h * A52)
+            .add_scaled(&k3, h * A53)
+            .add_scaled(&k4, h * A54),
+        c,
+    );
+    let k6 = rhs(
+        &y.add_scaled(&k1, h * A61)
+            .add_scaled(&k2, h * A62)
+            .add_scaled(&k3, h * A63)
+            .add_scaled(&k4, h * A64)
+            .add_scaled(&k5, h * A65),
+        c,
+    );
+    let mut y5 = y
+        .add_scaled(&k1, h * B1)
+        .add_scaled(&k3, h * B3)
+        .add_scaled(&k4, h * B4)
+        .add_scaled(&k5, h * B5)
+        .add_scaled(&k6, h * B6);
+    let k7 = rhs(&y5, c);
+    let zero = State {
+        r: y.r.map(|_| T::zero()),
+        rot: y.rot.map(|_| T::zero()),
+        n: y.n.map(|_| T::zero()),
+        m: y.m.map(|_| T::zero()),
+    };
+    let e = zero
+        .add_scaled(&k1, h * E1)
+        .add_scaled(&k3, h * E3)
+        .add_scaled(&k4, h * E4)
+        .add_scaled(&k5, h * E5)
+        .add_scaled(&k6, h * E6)
+        .add_scaled(&k7, h * E7)
+        .value();
+    let yv = y5.value();
+    let mut err = 0.0f64;
+    let mut acc = |ei: f64, yi: f64, sc: f64| {
+        let w = tol * (sc + yi.abs());
+        err = err.max(ei.abs() / w);
+    };
+    for i in 0..3 {
+        acc(e.r[i], yv.r[i], scale.length);
+        acc(e.n[i], yv.n[i], scale.force);
+        acc(e.m[i], yv.m[i], scale.moment);
+    }
+    for i in 0..9 {
+        acc(e.rot[i], yv.rot[i], 1.0);
+    }
+    y5.rot = orthonormalize(&y5.rot);
+    Dp45Outcome { y: y5, err }
+}

@@ -1,0 +1,22 @@
+#![doc = include_str!("../README.md")]
+#![warn(missing_docs)]
+
+pub mod cables;
+pub mod error;
+pub mod integrate;
+pub mod loads;
+pub mod math;
+pub mod robot;
+pub mod rod;
+pub mod settings;
+pub mod statics;
+
+pub use nalgebra;
+
+pub use cables::CableLength;
+pub use error::ModelError;
+pub use loads::{Frame, Loads, PointLoad};
+pub use robot::{Robot, RobotSpec};
+pub use rod::{CrossSection, Material};
+pub use settings::{GuideMass, Integrator, RodModel, SolverSettings};
+pub use statics::{solve, Pose, Sample, Solution, SolveReport, SolveStatus, Start, Workspace};

@@ -1,0 +1,123 @@
+//! Dense LU with partial pivoting on a buffer allocated once.
+//!
+//! nalgebra's `DMatrix::lu` consumes its matrix, so every Newton step would clone;
+//! shooting systems here are small (3 to ~100 unknowns) and solved every iteration,
+//! so the factorisation works in place on a reusable buffer instead.
+
+/// In-place LU factorisation workspace for an `n x n` system.
+#[derive(Clone, Debug)]
+pub struct DenseLu {
+    n: usize,
+    a: Vec<f64>,
+    piv: Vec<usize>,
+}
+
+impl DenseLu {
+    /// Workspace for systems up to `n x n`.
+    pub fn new(n: usize) -> Self {
+        Self {
+            n,
+            a: vec![0.0; n * n],
+            piv: vec![0; n],
+        }
+    }
+
+    /// Size of the system.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Mutable row-major storage of the matrix to factor: `a[i * n + j]`.
+    pub fn matrix_mut(&mut self) -> &mut [f64] {
+        &mut self.a
+    }
+
+    /// Factor in place. Returns the reciprocal condition estimate
+    /// `min |pivot| / max |pivot|`, or `None` when a pivot is zero or not finite.
+    pub fn factor(&mut self) -> Option<f64> {
+        let n = self.n;
+        let a = &mut self.a;
+        let (mut pmin, mut pmax) = (f64::INFINITY, 0.0f64);
+        for k in 0..n {
+            let mut p = k;
+            let mut best = a[k * n + k].abs();
+            for i in k + 1..n {
+                let v = a[i * n + k].abs();
+                if v > best {
+                    best = v;
+                    p = i;
+                }
+            }
+            if best.is_nan() || best <= 0.0 || !best.is_finite() {
+                return None;
+            }
+            self.piv[k] = p;
+            if p != k {
+                for j in 0..n {
+                    a.swap(k * n + j, p * n + j);
+                }
+            }
+            pmin = pmin.min(best);
+            pmax = pmax.max(best);
+            let inv = 1.0 / a[k * n + k];
+            for i in k + 1..n {
+                let l = a[i * n + k] * inv;
+                a[i * n + k] = l;
+                if l != 0.0 {
+                    for j in k + 1..n {
+                        a[i * n + j] -= l * a[k * n + j];
+                    }
+                }
+            }
+        }
+        Some(if n == 0 { 1.0 } else { pmin / pmax })
+    }
+
+    /// Solve `A x = b` in place (`b` becomes `x`) with the last factorisation.
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        let n = self.n;
+        let a = &self.a;
+        for k in 0..n {
+            b.swap(k, self.piv[k]);
+        }
+        for i in 0..n {
+            let mut s = b[i];
+            for j in 0..i {
+                s -= a[i * n + j] * b[j];
+            }
+            b[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = b[i];
+            for j in i + 1..n {
+                s -= a[i * n + j] * b[j];
+            }
+            b[i] = s / a[i * n + i];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_a_pivoting_system() {
+        let mut lu = DenseLu::new(3);
+        lu.matrix_mut()
+            .copy_from_slice(&[0.0, 2.0, 1.0, 1.0, 1.0, 0.0, 3.0, 0.0, 1.0]);
+        assert!(lu.factor().is_some());
+        let mut b = [5.0, 3.0, 6.0]; // x = (1, 2, 1)
+        lu.solve_in_place(&mut b);
+        for (x, e) in b.iter().zip([1.0, 2.0, 1.0]) {
+            assert!((x - e).abs() < 1e-14, "{b:?}");
+        }
+    }
+
+    #[test]
+    fn singular_matrix_is_reported() {
+        let mut lu = DenseLu::new(2);
+        lu.matrix_mut().copy_from_slice(&[1.0, 2.0, 2.0, 4.0]);
+        assert!(lu.factor().is_none());
+    }
+}

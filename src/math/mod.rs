@@ -1,0 +1,66 @@
+//! Math layer: the scalar trait the rod equations are written over, forward-mode
+//! dual numbers for exact Jacobians, a small dense LU with workspace, and SO(3) helpers.
+//!
+//! Nothing here knows about rods or robots.
+
+mod dual;
+mod lu;
+mod so3;
+
+pub use dual::Dual;
+pub use lu::DenseLu;
+pub use so3::{exp_so3, orthonormalize, rotation_angle_between, skew};
+
+use std::fmt::Debug;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A real scalar the rod equations can be evaluated over: `f64` for values and
+/// [`Dual`] for values plus exact directional derivatives (forward-mode AD).
+///
+/// The bounds are the ones nalgebra needs for fixed-size arithmetic
+/// (`Vector3<T>`, `Matrix3<T>` products) plus a square root for chord lengths.
+pub trait Real:
+    Copy
+    + Debug
+    + PartialEq
+    + 'static
+    + num_traits::Zero
+    + num_traits::One
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+    + DivAssign
+{
+    /// A constant (zero derivative).
+    fn cst(x: f64) -> Self;
+    /// The value part.
+    fn re(&self) -> f64;
+    /// Square root (derivative `1 / (2 sqrt(x))`).
+    fn sqrt(self) -> Self;
+    /// Multiply by a plain `f64` (cheaper than promoting it to `Self`).
+    fn scale(self, k: f64) -> Self;
+}
+
+impl Real for f64 {
+    #[inline(always)]
+    fn cst(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn re(&self) -> f64 {
+        *self
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn scale(self, k: f64) -> Self {
+        self * k
+    }
+}

@@ -1,0 +1,42 @@
+//! Rotation helpers over any [`Real`] scalar.
+
+use super::Real;
+use nalgebra::{Matrix3, Vector3};
+
+/// The hat map `u -> u^`, thesis eq. 2.5: `u^ w = u x w`.
+#[inline(always)]
+pub fn skew<T: Real>(u: &Vector3<T>) -> Matrix3<T> {
+    let z = T::zero();
+    Matrix3::new(z, -u.z, u.y, u.z, z, -u.x, -u.y, u.x, z)
+}
+
+/// One Newton-Schulz step towards the nearest rotation: `R (3 I - R^T R) / 2`.
+///
+/// A polynomial map, so it is exact for dual numbers; applied after every
+/// integration step it keeps `R^T R = I` to round-off (drift of RK4 is O(h^5)).
+#[inline(always)]
+pub fn orthonormalize<T: Real>(r: &Matrix3<T>) -> Matrix3<T> {
+    let rtr = r.transpose() * r;
+    let three = T::cst(3.0);
+    let mut m = -rtr;
+    m[(0, 0)] += three;
+    m[(1, 1)] += three;
+    m[(2, 2)] += three;
+    (r * m).map(|x| x.scale(0.5))
+}
+
+/// Rodrigues' formula for a rotation vector (axis times angle, rad).
+pub fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
+    let th = w.norm();
+    let k = skew(w);
+    if th < 1e-12 {
+        return Matrix3::identity() + k;
+    }
+    Matrix3::identity() + k * (th.sin() / th) + k * k * ((1.0 - th.cos()) / (th * th))
+}
+
+/// Angle (rad) of the rotation `a^T b`.
+pub fn rotation_angle_between(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    let c = ((a.transpose() * b).trace() - 1.0) * 0.5;
+    c.clamp(-1.0, 1.0).acos()
+}

@@ -1,0 +1,226 @@
+//! Robot layer: sections, guide disks, cables and the base pose, validated once.
+//!
+//! Conventions (also in the README): every section's backbone runs along its local
+//! `+z` axis (thesis 2.5: the rod "extends along the z axis"); guide disks lie in the
+//! local `xy` plane (thesis 3.8.1 says "yz", which cannot be perpendicular to a rod
+//! along z: a typo); hole angles are measured in that plane from local `+x` towards
+//! `+y`; cable `j` runs from the base plate (`s = 0`) through every guide of the
+//! sections it spans to the last guide of its `end_section`.
+
+mod spec;
+
+pub use spec::{BaseSpec, CableSpec, GuideSpec, HolesSpec, RobotSpec, SectionSpec};
+
+use crate::error::ModelError;
+use crate::math::exp_so3;
+use crate::rod::Stiffness;
+use nalgebra::{Matrix3, Vector3};
+
+/// One guide disk of the validated robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Guide {
+    /// Section the disk sits on.
+    pub section: usize,
+    /// Index within its section (0 = nearest the base).
+    pub index: usize,
+    /// Arc length of the disk centre from the robot base (m).
+    pub s: f64,
+    /// Disk thickness along the backbone (m).
+    pub thickness: f64,
+    /// Disk mass (kg).
+    pub mass: f64,
+    /// Hole centres in the disk's local frame (m), `z = 0`.
+    pub holes: Vec<Vector3<f64>>,
+}
+
+/// One section of the validated robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Section {
+    /// Arc length where the section starts (m).
+    pub start: f64,
+    /// Section length (m).
+    pub length: f64,
+    /// Stiffnesses and bare-rod linear density.
+    pub stiffness: Stiffness,
+    /// Precurvature `u*` in the local frame (1/m).
+    pub precurvature: Vector3<f64>,
+    /// Global indices of this section's guides, base to tip.
+    pub guides: std::ops::Range<usize>,
+}
+
+impl Section {
+    /// Arc length where the section ends (m).
+    pub fn end(&self) -> f64 {
+        self.start + self.length
+    }
+}
+
+/// One cable of the validated robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cable {
+    /// Optional name.
+    pub name: String,
+    /// Hole index used on every disk and on the base plate.
+    pub hole: usize,
+    /// Section on whose last guide the cable ends.
+    pub end_section: usize,
+    /// Global guide indices the cable passes, base to termination.
+    pub route: Vec<usize>,
+    /// Hole position on the base plate, in the base frame (m).
+    pub base_hole: Vector3<f64>,
+}
+
+/// A validated robot: an invalid one cannot be constructed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Robot {
+    spec: RobotSpec,
+    sections: Vec<Section>,
+    guides: Vec<Guide>,
+    cables: Vec<Cable>,
+    base_rotation: Matrix3<f64>,
+    base_position: Vector3<f64>,
+}
+
+impl Robot {
+    /// Validate a description and derive the arc-length layout.
+    pub fn new(spec: RobotSpec) -> Result<Self, ModelError> {
+        spec.validate()?;
+        let mut sections = Vec::with_capacity(spec.sections.len());
+        let mut guides = Vec::new();
+        let mut start = 0.0;
+        for (k, sec) in spec.sections.iter().enumerate() {
+            let g0 = guides.len();
+            if let Some(g) = &sec.guides {
+                let holes: Vec<Vector3<f64>> = g
+                    .holes
+                    .angles_deg
+                    .iter()
+                    .map(|a| {
+                        let t = a.to_radians();
+                        Vector3::new(g.holes.radius_m * t.cos(), g.holes.radius_m * t.sin(), 0.0)
+                    })
+                    .collect();
+                for i in 0..g.count {
+                    guides.push(Guide {
+                        section: k,
+                        index: i,
+                        s: start + g.first_offset_m + i as f64 * g.spacing_m,
+                        thickness: g.thickness_m,
+                        mass: g.mass_kg,
+                        holes: holes.clone(),
+                    });
+                }
+            }
+            sections.push(Section {
+                start,
+                length: sec.length_m,
+                stiffness: Stiffness::new(&sec.material, &sec.shape, sec.shear_coefficient),
+                precurvature: Vector3::from(sec.precurvature_per_m),
+                guides: g0..guides.len(),
+            });
+            start += sec.length_m;
+        }
+        let mut cables = Vec::with_capacity(spec.cables.len());
+        for (j, c) in spec.cables.iter().enumerate() {
+            let route: Vec<usize> = (0..guides.len())
+                .filter(|&g| guides[g].section <= c.end_section)
+                .collect();
+            let field = format!("cables[{j}]");
+            let last = *route.last().ok_or_else(|| ModelError::Invalid {
+                field: format!("{field}.end_section"),
+                why: format!(
+                    "no guide disk on sections 0..={}: a cable needs at least one",
+                    c.end_section
+                ),
+            })?;
+            if guides[last].section != c.end_section {
+                return Err(ModelError::Invalid {
+                    field: format!("{field}.end_section"),
+                    why: format!("section {} has no guide disk to end on", c.end_section),
+                });
+            }
+            for &g in &route {
+                if c.hole >= guides[g].holes.len() {
+                    return Err(ModelError::BadIndex {
+                        field: format!(
+                            "{field}.hole (on guide {} of section {})",
+                            guides[g].index, guides[g].section
+                        ),
+                        index: c.hole,
+                        count: guides[g].holes.len(),
+                    });
+                }
+            }
+            let base_hole = guides[route[0]].holes[c.hole];
+            cables.push(Cable {
+                name: c.name.clone().unwrap_or_else(|| format!("cable{j}")),
+                hole: c.hole,
+                end_section: c.end_section,
+                route,
+                base_hole,
+            });
+        }
+        let axis = Vector3::from(spec.base.axis);
+        let base_rotation = exp_so3(&(axis.normalize() * spec.base.angle_deg.to_radians()));
+        Ok(Self {
+            base_position: Vector3::from(spec.base.position_m),
+            spec,
+            sections,
+            guides,
+            cables,
+            base_rotation,
+        })
+    }
+
+    /// The description this robot was built from.
+    pub fn spec(&self) -> &RobotSpec {
+        &self.spec
+    }
+    /// Sections, base to tip.
+    pub fn sections(&self) -> &[Section] {
+        &self.sections
+    }
+    /// All guide disks, base to tip.
+    pub fn guides(&self) -> &[Guide] {
+        &self.guides
+    }
+    /// Cables.
+    pub fn cables(&self) -> &[Cable] {
+        &self.cables
+    }
+    /// Total backbone length (m).
+    pub fn length(&self) -> f64 {
+        self.sections.last().map_or(0.0, |s| s.end())
+    }
+    /// Base orientation `R(0)` in the world frame.
+    pub fn base_rotation(&self) -> &Matrix3<f64> {
+        &self.base_rotation
+    }
+    /// Base position `r(0)` in the world frame (m).
+    pub fn base_position(&self) -> &Vector3<f64> {
+        &self.base_position
+    }
+    /// Section containing arc length `s` (the last one for `s` at a boundary past the end).
+    pub fn section_at(&self, s: f64) -> usize {
+        self.sections
+            .iter()
+            .position(|sec| s < sec.end())
+            .unwrap_or(self.sections.len() - 1)
+    }
+    /// A copy with the base moved to `position` and rotated to `rotation`.
+    pub fn with_base(&self, rotation: Matrix3<f64>, position: Vector3<f64>) -> Self {
+        let mut r = self.clone();
+        let w = nalgebra::Rotation3::from_matrix_unchecked(rotation).scaled_axis();
+        let angle = w.norm();
+        r.spec.base.axis = if angle > 0.0 {
+            (w / angle).into()
+        } else {
+            [0.0, 0.0, 1.0]
+        };
+        r.spec.base.angle_deg = angle.to_degrees();
+        r.spec.base.position_m = position.into();
+        r.base_rotation = rotation;
+        r.base_position = position;
+        r
+    }
+}

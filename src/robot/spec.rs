@@ -1,0 +1,225 @@
+//! Serializable robot description (the `[robot]` table of a scene file), SI units.
+
+use crate::error::ModelError;
+use crate::rod::{CrossSection, Material};
+use serde::{Deserialize, Serialize};
+
+/// Whole robot: base pose, sections base to tip, cables.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// Base pose (default: at the origin, backbone along world `+z`).
+    #[serde(default)]
+    pub base: BaseSpec,
+    /// Sections, base to tip (at least one).
+    pub sections: Vec<SectionSpec>,
+    /// Cables (default none).
+    #[serde(default)]
+    pub cables: Vec<CableSpec>,
+}
+
+/// Base pose `r(0)`, `R(0)` (thesis table 2.1) as position plus axis-angle.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BaseSpec {
+    /// Position of the clamp exit in the world frame (m). Default `[0, 0, 0]`.
+    pub position_m: [f64; 3],
+    /// Rotation axis in the world frame (any non-zero length). Default `[0, 0, 1]`.
+    pub axis: [f64; 3],
+    /// Rotation angle about `axis` (degrees). Default 0. A rod clamped horizontally
+    /// along world `+x` is `axis = [0, 1, 0]`, `angle_deg = 90`.
+    pub angle_deg: f64,
+}
+
+impl Default for BaseSpec {
+    fn default() -> Self {
+        Self {
+            position_m: [0.0; 3],
+            axis: [0.0, 0.0, 1.0],
+            angle_deg: 0.0,
+        }
+    }
+}
+
+/// One section: a length of uniform rod, optionally carrying evenly spaced guide disks.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionSpec {
+    /// Unstretched length (m), > 0.
+    pub length_m: f64,
+    /// Cross-section.
+    pub shape: CrossSection,
+    /// Material.
+    #[serde(flatten)]
+    pub material: Material,
+    /// Timoshenko shear coefficient `k` in `D = diag(kGA, kGA, EA)`. Default 1
+    /// (the thesis's `D1 = D2 = GA`); 6(1+nu)/(7+6nu) for a solid circle.
+    #[serde(default = "one")]
+    pub shear_coefficient: f64,
+    /// Precurvature `u*` (1/m) in the local frame. Default zero (straight rod).
+    #[serde(default)]
+    pub precurvature_per_m: [f64; 3],
+    /// Guide disks on this section (default none).
+    #[serde(default)]
+    pub guides: Option<GuideSpec>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Evenly spaced guide disks (thesis 3.8, figure 3.5).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GuideSpec {
+    /// Number of disks, >= 1.
+    pub count: usize,
+    /// Arc length from the section start to the first disk's centre (m).
+    pub first_offset_m: f64,
+    /// Centre-to-centre spacing (m); ignored when `count = 1`.
+    pub spacing_m: f64,
+    /// Disk thickness along the backbone (m).
+    pub thickness_m: f64,
+    /// Disk outer diameter (m); holes must lie inside it.
+    pub diameter_m: f64,
+    /// Mass of one disk (kg).
+    pub mass_kg: f64,
+    /// Cable holes.
+    pub holes: HolesSpec,
+}
+
+/// Cable holes on a disk: one radius, several angles.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HolesSpec {
+    /// Distance of the hole centres from the backbone axis (m).
+    pub radius_m: f64,
+    /// Hole angles (degrees) from local `+x` towards `+y`. Default `[0, 120, 240]`.
+    #[serde(default = "three_holes")]
+    pub angles_deg: Vec<f64>,
+}
+
+fn three_holes() -> Vec<f64> {
+    vec![0.0, 120.0, 240.0]
+}
+
+/// A cable: which hole it uses and on which section's last disk it ends.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CableSpec {
+    /// Optional name used in reports.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Hole index (into `holes.angles_deg`) used on every disk and the base plate.
+    pub hole: usize,
+    /// Section on whose last disk the cable is tied.
+    pub end_section: usize,
+}
+
+impl RobotSpec {
+    /// Check every field; errors name the field path and the value.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        ModelError::finite3("base.position_m", &self.base.position_m)?;
+        ModelError::finite3("base.axis", &self.base.axis)?;
+        ModelError::finite("base.angle_deg", self.base.angle_deg)?;
+        let a = self.base.axis;
+        if a[0] * a[0] + a[1] * a[1] + a[2] * a[2] == 0.0 {
+            return Err(ModelError::Invalid {
+                field: "base.axis".into(),
+                why: "must be non-zero".into(),
+            });
+        }
+        if self.sections.is_empty() {
+            return Err(ModelError::Invalid {
+                field: "sections".into(),
+                why: "at least one section is needed".into(),
+            });
+        }
+        for (k, s) in self.sections.iter().enumerate() {
+            let f = format!("sections[{k}]");
+            ModelError::positive(format!("{f}.length_m"), s.length_m)?;
+            s.shape.validate(&format!("{f}.shape"))?;
+            s.material.validate(&f)?;
+            ModelError::positive(format!("{f}.shear_coefficient"), s.shear_coefficient)?;
+            ModelError::finite3(&format!("{f}.precurvature_per_m"), &s.precurvature_per_m)?;
+            if let Some(g) = &s.guides {
+                g.validate(k, s.length_m)?;
+            }
+        }
+        for (j, c) in self.cables.iter().enumerate() {
+            if c.end_section >= self.sections.len() {
+                return Err(ModelError::BadIndex {
+                    field: format!("cables[{j}].end_section"),
+                    index: c.end_section,
+                    count: self.sections.len(),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+impl GuideSpec {
+    fn validate(&self, section: usize, length: f64) -> Result<(), ModelError> {
+        let f = format!("sections[{section}].guides");
+        if self.count == 0 {
+            return Err(ModelError::OutOfRange {
+                field: format!("{f}.count"),
+                value: 0.0,
+                why: "omit `guides` for a section without disks".into(),
+            });
+        }
+        ModelError::non_negative(format!("{f}.first_offset_m"), self.first_offset_m)?;
+        ModelError::non_negative(format!("{f}.thickness_m"), self.thickness_m)?;
+        ModelError::positive(format!("{f}.diameter_m"), self.diameter_m)?;
+        ModelError::non_negative(format!("{f}.mass_kg"), self.mass_kg)?;
+        ModelError::non_negative(format!("{f}.holes.radius_m"), self.holes.radius_m)?;
+        if self.count > 1 {
+            ModelError::positive(format!("{f}.spacing_m"), self.spacing_m)?;
+            if self.spacing_m < self.thickness_m {
+                return Err(ModelError::GuidesOverlap {
+                    section,
+                    guide: 0,
+                    next: 1,
+                    spacing: self.spacing_m,
+                    thickness: self.thickness_m,
+                });
+            }
+        } else {
+            ModelError::finite(format!("{f}.spacing_m"), self.spacing_m)?;
+        }
+        if self.holes.radius_m > self.diameter_m / 2.0 {
+            return Err(ModelError::OutOfRange {
+                field: format!("{f}.holes.radius_m"),
+                value: self.holes.radius_m,
+                why: format!(
+                    "holes must lie on the disk (radius <= diameter_m / 2 = {})",
+                    self.diameter_m / 2.0
+                ),
+            });
+        }
+        if self.holes.angles_deg.is_empty() {
+            return Err(ModelError::Invalid {
+                field: format!("{f}.holes.angles_deg"),
+                why: "at least one hole".into(),
+            });
+        }
+        for (i, a) in self.holes.angles_deg.iter().enumerate() {
+            ModelError::finite(format!("{f}.holes.angles_deg[{i}]"), *a)?;
+        }
+        let half = self.thickness_m / 2.0;
+        for i in 0..self.count {
+            let c = self.first_offset_m + i as f64 * self.spacing_m;
+            if c - half < -1e-12 || c + half > length + 1e-12 {
+                return Err(ModelError::GuideOutsideSection {
+                    section,
+                    guide: i,
+                    start: c - half,
+                    end: c + half,
+                    length,
+                });
+            }
+        }
+        Ok(())
+    }
+}

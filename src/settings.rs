@@ -1,0 +1,129 @@
+//! Solver settings: plain structs with documented units and defaults.
+
+use crate::error::ModelError;
+use serde::{Deserialize, Serialize};
+
+/// Which rod theory the backbone obeys.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RodModel {
+    /// Full Cosserat rod: shear, extension, bending, torsion (thesis eqs. 2.3-2.13).
+    #[default]
+    Cosserat,
+    /// Kirchhoff rod: inextensible and unshearable, `v = e3`.
+    Kirchhoff,
+}
+
+/// How the guide disks' mass enters the model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GuideMass {
+    /// Disks are massless.
+    None,
+    /// Thesis 3.7: disk mass spread evenly over its section, `rho_avg = (m_r + m_cg) / r_l`.
+    #[default]
+    Average,
+    /// Thesis 3.8: piecewise density, disk mass spread over its own thickness
+    /// (`rho_e A_cg = m_cg / h_cg + m_r / r_l`, table 3.2).
+    Accurate,
+    /// Each disk a point mass at its centre: a jump `n+ = n- - m g` in the internal force.
+    Point,
+}
+
+/// ODE integrator along arc length.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Integrator {
+    /// Classical fixed-step RK4; steps are spread over each section in proportion to
+    /// length, aligned with guides, disk edges and point loads (>= 1 per interval).
+    Rk4 {
+        /// Steps per section (default 24).
+        steps_per_section: usize,
+    },
+    /// Dormand-Prince 5(4) with step-size control, steps landing on every event.
+    Adaptive {
+        /// Relative/absolute tolerance on the scaled state (default 1e-8).
+        tol: f64,
+        /// Step limit over the whole rod (default 100000); exceeding it fails the pass.
+        max_steps: usize,
+    },
+}
+
+impl Default for Integrator {
+    fn default() -> Self {
+        Self::Rk4 {
+            steps_per_section: 24,
+        }
+    }
+}
+
+/// Everything that controls a forward solve.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SolverSettings {
+    /// Rod theory (default `cosserat`).
+    pub rod_model: RodModel,
+    /// Guide-mass model (default `average`, the thesis's recommendation in 4.7.3).
+    pub guide_mass: GuideMass,
+    /// Integrator (default RK4, 24 steps per section).
+    pub integrator: Integrator,
+    /// Newton iteration limit per solve (default 50).
+    pub max_iterations: usize,
+    /// Convergence threshold on the scaled boundary residual's max-norm (default 1e-10).
+    /// Forces are scaled by `EI/L^2`, moments by `EI/L`, positions by `L`.
+    pub tolerance: f64,
+    /// Retry a failed cold start by load continuation (default true).
+    pub continuation: bool,
+    /// Largest number of continuation steps (default 32).
+    pub max_continuation_steps: usize,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            rod_model: RodModel::default(),
+            guide_mass: GuideMass::default(),
+            integrator: Integrator::default(),
+            max_iterations: 50,
+            tolerance: 1e-10,
+            continuation: true,
+            max_continuation_steps: 32,
+        }
+    }
+}
+
+impl SolverSettings {
+    /// Check every field.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        match self.integrator {
+            Integrator::Rk4 { steps_per_section } => {
+                if steps_per_section == 0 {
+                    return Err(ModelError::OutOfRange {
+                        field: "numerics.integrator.rk4.steps_per_section".into(),
+                        value: 0.0,
+                        why: "at least 1".into(),
+                    });
+                }
+            }
+            Integrator::Adaptive { tol, max_steps } => {
+                ModelError::positive("numerics.integrator.adaptive.tol", tol)?;
+                if max_steps == 0 {
+                    return Err(ModelError::OutOfRange {
+                        field: "numerics.integrator.adaptive.max_steps".into(),
+                        value: 0.0,
+                        why: "at least 1".into(),
+                    });
+                }
+            }
+        }
+        ModelError::positive("numerics.tolerance", self.tolerance)?;
+        if self.max_iterations == 0 {
+            return Err(ModelError::OutOfRange {
+                field: "numerics.max_iterations".into(),
+                value: 0.0,
+                why: "at least 1".into(),
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,350 @@
+//! The arc-length plan of a forward solve: intervals between events (section ends,
+//! guide disks, disk edges, point loads) with constant ODE coefficients, the events
+//! themselves, the cable routing and the layout of the shooting unknowns.
+//!
+//! Structure (intervals, events, unknowns) depends on the robot, the settings and
+//! which loads exist; the load *values* can be updated in place without allocating.
+
+use crate::error::ModelError;
+use crate::integrate::Coeffs;
+use crate::loads::{Frame, Loads};
+use crate::robot::Robot;
+use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
+use nalgebra::{Matrix3, Vector3};
+
+/// An event applied at the end of an interval.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Event {
+    /// Guide disk (global index): pose record, point mass, cable forces.
+    Guide(usize),
+    /// Point load (index into `loads.point`).
+    Point(usize),
+    /// End of a section: pose record.
+    SectionEnd(usize),
+}
+
+/// A stretch of rod with constant coefficients.
+#[derive(Clone, Debug)]
+pub(crate) struct Interval {
+    pub s0: f64,
+    pub s1: f64,
+    pub section: usize,
+    /// Linear density including distributed guide mass (kg/m).
+    pub lambda: f64,
+    /// RK4 steps.
+    pub steps: usize,
+    /// Events at `s1`.
+    pub events: std::ops::Range<usize>,
+}
+
+/// Resolved point load (values updated by `set_loads`).
+#[derive(Clone, Debug)]
+pub(crate) struct PlanPoint {
+    pub section: usize,
+    pub force: Vector3<f64>,
+    pub torque: Vector3<f64>,
+    pub body: bool,
+    pub mass: f64,
+}
+
+/// One cable as the pass sees it.
+#[derive(Clone, Debug)]
+pub(crate) struct PlanCable {
+    pub tension: f64,
+    /// Tensioned at full load (structure: decides the unknowns).
+    pub tensioned: bool,
+    /// Base-plate hole in world coordinates.
+    pub base_hole: Vector3<f64>,
+    /// Local hole vector on the route's disks.
+    pub hole_local: Vector3<f64>,
+    /// Number of disks on the route.
+    pub len: usize,
+    /// Arc length of the termination disk (m).
+    pub end_s: f64,
+    /// Index of the first hole unknown (route disk 1) when tensioned.
+    pub unknowns: Option<usize>,
+}
+
+/// Everything a pass needs.
+#[derive(Clone, Debug)]
+pub(crate) struct Plan {
+    pub intervals: Vec<Interval>,
+    pub events: Vec<Event>,
+    pub start_events: std::ops::Range<usize>,
+    pub coeffs: Vec<Coeffs>,
+    pub gravity: Vector3<f64>,
+    pub points: Vec<PlanPoint>,
+    pub cables: Vec<PlanCable>,
+    /// `(cable, route position)` of each guide.
+    pub guide_cables: Vec<Vec<(usize, usize)>>,
+    pub guide_mass: Vec<f64>,
+    pub point_guides: bool,
+    pub base_r: Vector3<f64>,
+    pub base_rot: Matrix3<f64>,
+    /// `n(0)` is known in closed form (thesis eq. 2.8 / table 3.1): only `m(0)` is shot.
+    pub closed_form: bool,
+    /// `n(0)` at full load when `closed_form` (N).
+    pub closed_n0: Vector3<f64>,
+    pub n_unknowns: usize,
+    pub length: f64,
+    pub force_scale: f64,
+    pub moment_scale: f64,
+    pub integrator: Integrator,
+    pub n_sections: usize,
+    pub n_guides: usize,
+}
+
+impl Plan {
+    pub fn new(
+        robot: &Robot,
+        loads: &Loads,
+        settings: &SolverSettings,
+    ) -> Result<Self, ModelError> {
+        settings.validate()?;
+        loads.validate(robot)?;
+        let length = robot.length();
+        let tol = 1e-12 * length;
+        // marks: (s, Some(event)) or (s, None) for a plain breakpoint
+        let mut marks: Vec<(f64, Option<Event>)> = Vec::new();
+        for (k, sec) in robot.sections().iter().enumerate() {
+            marks.push((sec.end(), Some(Event::SectionEnd(k))));
+        }
+        for (g, guide) in robot.guides().iter().enumerate() {
+            marks.push((guide.s, Some(Event::Guide(g))));
+            if settings.guide_mass == GuideMass::Accurate && guide.thickness > 0.0 {
+                marks.push((guide.s - guide.thickness / 2.0, None));
+                marks.push((guide.s + guide.thickness / 2.0, None));
+            }
+        }
+        for (i, p) in loads.point.iter().enumerate() {
+            marks.push((robot.sections()[p.section].end(), Some(Event::Point(i))));
+        }
+        marks.sort_by(|a, b| a.0.total_cmp(&b.0));
+
+        let mut events = Vec::new();
+        let mut start_events = 0..0;
+        let mut breaks: Vec<(f64, std::ops::Range<usize>)> = Vec::new();
+        let mut i = 0;
+        while i < marks.len() {
+            let s = marks[i].0;
+            let e0 = events.len();
+            while i < marks.len() && marks[i].0 - s <= tol {
+                if let Some(e) = marks[i].1 {
+                    events.push(e);
+                }
+                i += 1;
+            }
+            if s <= tol {
+                start_events = e0..events.len();
+            } else {
+                breaks.push((s.min(length), e0..events.len()));
+            }
+        }
+
+        let (steps, adaptive) = match settings.integrator {
+            Integrator::Rk4 { steps_per_section } => (steps_per_section, false),
+            Integrator::Adaptive { .. } => (1, true),
+        };
+        let mut intervals = Vec::with_capacity(breaks.len());
+        let mut s0 = 0.0;
+        for (s1, ev) in breaks {
+            let mid = 0.5 * (s0 + s1);
+            let k = robot.section_at(mid);
+            let sec = &robot.sections()[k];
+            let mut lambda = sec.stiffness.linear_density;
+            let gs = &robot.guides()[sec.guides.clone()];
+            match settings.guide_mass {
+                GuideMass::Average => lambda += gs.iter().map(|g| g.mass).sum::<f64>() / sec.length,
+                GuideMass::Accurate => {
+                    for g in gs {
+                        if g.thickness > 0.0 && (mid - g.s).abs() < g.thickness / 2.0 {
+                            lambda += g.mass / g.thickness;
+                        }
+                    }
+                }
+                GuideMass::None | GuideMass::Point => {}
+            }
+            let n = if adaptive {
+                1
+            } else {
+                ((steps as f64) * (s1 - s0) / sec.length).ceil().max(1.0) as usize
+            };
+            intervals.push(Interval {
+                s0,
+                s1,
+                section: k,
+                lambda,
+                steps: n,
+                events: ev,
+            });
+            s0 = s1;
+        }
+
+        let coeffs = robot
+            .sections()
+            .iter()
+            .map(|sec| Coeffs {
+                inv_c: sec.stiffness.bend_twist.map(|x| 1.0 / x),
+                inv_d: sec.stiffness.shear_stretch.map(|x| 1.0 / x),
+                u_star: sec.precurvature,
+                f: Vector3::zeros(),
+                kirchhoff: settings.rod_model == RodModel::Kirchhoff,
+            })
+            .collect();
+
+        let mut guide_cables = vec![Vec::new(); robot.guides().len()];
+        let mut cables = Vec::with_capacity(robot.cables().len());
+        let body_loads = loads.point.iter().any(|p| p.frame == Frame::Body);
+        let tensioned = (0..robot.cables().len()).any(|j| loads.tension(j) > 0.0);
+        let closed_form = !body_loads && !tensioned;
+        let mut n_unknowns = if closed_form { 3 } else { 6 };
+        for (j, c) in robot.cables().iter().enumerate() {
+            for (k, &g) in c.route.iter().enumerate() {
+                guide_cables[g].push((j, k));
+            }
+            let unknowns = if loads.tension(j) > 0.0 && c.route.len() > 1 {
+                let u = n_unknowns;
+                n_unknowns += 3 * (c.route.len() - 1);
+                Some(u)
+            } else {
+                None
+            };
+            cables.push(PlanCable {
+                tension: loads.tension(j),
+                tensioned: loads.tension(j) > 0.0,
+                base_hole: robot.base_position() + robot.base_rotation() * c.base_hole,
+                hole_local: robot.guides()[c.route[0]].holes[c.hole],
+                len: c.route.len(),
+                end_s: robot.guides()[c.route[c.route.len() - 1]].s,
+                unknowns,
+            });
+        }
+        let ei = robot.sections()[0].stiffness.bend_twist.x;
+        let mut plan = Self {
+            intervals,
+            events,
+            start_events,
+            coeffs,
+            gravity: Vector3::from(loads.gravity_m_s2),
+            points: Vec::new(),
+            cables,
+            guide_cables,
+            guide_mass: robot.guides().iter().map(|g| g.mass).collect(),
+            point_guides: settings.guide_mass == GuideMass::Point,
+            base_r: *robot.base_position(),
+            base_rot: *robot.base_rotation(),
+            closed_form,
+            closed_n0: Vector3::zeros(),
+            n_unknowns,
+            length,
+            force_scale: ei / (length * length),
+            moment_scale: ei / length,
+            integrator: settings.integrator,
+            n_sections: robot.sections().len(),
+            n_guides: robot.guides().len(),
+        };
+        plan.points = loads
+            .point
+            .iter()
+            .map(|p| PlanPoint {
+                section: p.section,
+                force: Vector3::zeros(),
+                torque: Vector3::zeros(),
+                body: p.frame == Frame::Body,
+                mass: 0.0,
+            })
+            .collect();
+        plan.set_load_values(loads);
+        Ok(plan)
+    }
+
+    /// True when `loads` keeps this plan's structure (same point-load sites and frames,
+    /// same set of tensioned cables), so only values need updating.
+    pub fn same_structure(&self, loads: &Loads) -> bool {
+        loads.point.len() == self.points.len()
+            && self
+                .points
+                .iter()
+                .zip(&loads.point)
+                .all(|(pp, p)| pp.section == p.section && pp.body == (p.frame == Frame::Body))
+            && loads.tensions_n.len() <= self.cables.len()
+            && self
+                .cables
+                .iter()
+                .enumerate()
+                .all(|(j, c)| (loads.tension(j) > 0.0) == c.tensioned)
+    }
+
+    /// Copy load values (no allocation). The structure must match.
+    pub fn set_load_values(&mut self, loads: &Loads) {
+        self.gravity = Vector3::from(loads.gravity_m_s2);
+        for (pp, p) in self.points.iter_mut().zip(&loads.point) {
+            pp.force = Vector3::from(p.force_n);
+            pp.torque = Vector3::from(p.torque_nm);
+            pp.mass = p.mass_kg;
+        }
+        for (j, c) in self.cables.iter_mut().enumerate() {
+            c.tension = loads.tension(j);
+        }
+        self.closed_n0 = self.straight_wrench(1.0).0;
+    }
+
+    /// Distributed force on an interval (N/m), scaled by the continuation factor.
+    #[inline]
+    pub fn coeffs_for(&self, iv: &Interval, load_scale: f64) -> Coeffs {
+        let mut c = self.coeffs[iv.section];
+        c.f = self.gravity * (iv.lambda * load_scale);
+        c
+    }
+
+    /// Resultant external force and its moment about the base on the *straight* rod
+    /// (cables included), used for `n(0)` in closed form and for cold starts.
+    pub fn straight_wrench(&self, load_scale: f64) -> (Vector3<f64>, Vector3<f64>) {
+        let axis = self.base_rot * Vector3::z();
+        let at = |s: f64| self.base_r + axis * s;
+        let (mut f, mut m) = (Vector3::zeros(), Vector3::zeros());
+        let mut add = |p: Vector3<f64>, force: Vector3<f64>, torque: Vector3<f64>| {
+            f += force;
+            m += (p - self.base_r).cross(&force) + torque;
+        };
+        for iv in &self.intervals {
+            let w = self.gravity * (iv.lambda * (iv.s1 - iv.s0) * load_scale);
+            add(at(0.5 * (iv.s0 + iv.s1)), w, Vector3::zeros());
+        }
+        let located = self.start_events.clone().map(|e| (0.0, e)).chain(
+            self.intervals
+                .iter()
+                .flat_map(|iv| iv.events.clone().map(move |e| (iv.s1, e))),
+        );
+        for (s, ei) in located {
+            match self.events[ei] {
+                Event::Point(i) => {
+                    let p = &self.points[i];
+                    let (fw, tw) = if p.body {
+                        (self.base_rot * p.force, self.base_rot * p.torque)
+                    } else {
+                        (p.force, p.torque)
+                    };
+                    add(
+                        at(s),
+                        (fw + self.gravity * p.mass) * load_scale,
+                        tw * load_scale,
+                    );
+                }
+                Event::Guide(g) if self.point_guides => add(
+                    at(s),
+                    self.gravity * (self.guide_mass[g] * load_scale),
+                    Vector3::zeros(),
+                ),
+                _ => {}
+            }
+        }
+        for c in &self.cables {
+            if c.tension > 0.0 {
+                let p = at(c.end_s) + self.base_rot * c.hole_local;
+                add(p, -axis * (c.tension * load_scale), Vector3::zeros());
+            }
+        }
+        (f, m)
+    }
+}

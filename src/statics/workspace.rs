@@ -1,0 +1,426 @@
+//! The reusable solver workspace: buffers sized once per plan, Newton with an exact
+//! dual-number Jacobian, backtracking line search, warm starts, load continuation.
+
+use super::pass::{pass, PassBuf, Recording};
+use super::plan::Plan;
+use super::{GuidePose, Solution, SolveReport, SolveStatus};
+use crate::cables::{path_length, segments, CableLength};
+use crate::error::ModelError;
+use crate::loads::Loads;
+use crate::math::{DenseLu, Dual};
+use crate::robot::Robot;
+use crate::settings::SolverSettings;
+use nalgebra::Vector3;
+
+/// Where Newton starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Start {
+    /// From the rigid straight-rod reactions; continuation if that fails.
+    Cold,
+    /// From the previous solution in this workspace (cold if there is none).
+    Warm,
+}
+
+/// Solver state for repeated solves of one robot: allocate once, solve many times.
+///
+/// [`Workspace::set_loads`] with the same load structure and [`Workspace::solve`]
+/// with [`Start::Warm`] do not allocate.
+pub struct Workspace {
+    robot: Robot,
+    loads: Loads,
+    settings: SolverSettings,
+    plan: Plan,
+    x: Vec<f64>,
+    x_trial: Vec<f64>,
+    dx: Vec<f64>,
+    res: Vec<f64>,
+    lu: DenseLu,
+    b64: PassBuf<f64>,
+    b3: PassBuf<Dual<3>>,
+    b6: PassBuf<Dual<6>>,
+    has_solution: bool,
+    tip: Vector3<f64>,
+    report: SolveReport,
+    jac_evals: u64,
+}
+
+impl Workspace {
+    /// Validate and build the plan and buffers.
+    pub fn new(robot: Robot, loads: Loads, settings: SolverSettings) -> Result<Self, ModelError> {
+        let plan = Plan::new(&robot, &loads, &settings)?;
+        let n = plan.n_unknowns;
+        Ok(Self {
+            b64: PassBuf::new(&plan),
+            b3: PassBuf::new(&plan),
+            b6: PassBuf::new(&plan),
+            x: vec![0.0; n],
+            x_trial: vec![0.0; n],
+            dx: vec![0.0; n],
+            res: vec![0.0; n],
+            lu: DenseLu::new(n),
+            robot,
+            loads,
+            settings,
+            plan,
+            has_solution: false,
+            tip: Vector3::zeros(),
+            report: SolveReport {
+                status: SolveStatus::NonFinite,
+                iterations: 0,
+                residual: f64::INFINITY,
+                rhs_evals: 0,
+                jacobian_evals: 0,
+                continuation_steps: 0,
+                unknowns: n,
+            },
+            jac_evals: 0,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+    /// The current loads.
+    pub fn loads(&self) -> &Loads {
+        &self.loads
+    }
+    /// The settings.
+    pub fn settings(&self) -> &SolverSettings {
+        &self.settings
+    }
+    /// Report of the last solve.
+    pub fn report(&self) -> &SolveReport {
+        &self.report
+    }
+    /// Number of shooting unknowns for the current loads.
+    pub fn unknowns(&self) -> usize {
+        self.plan.n_unknowns
+    }
+
+    /// Replace the loads. Keeps the warm start and does not allocate when the load
+    /// structure (point-load sites and frames, set of tensioned cables) is unchanged.
+    pub fn set_loads(&mut self, loads: &Loads) -> Result<(), ModelError> {
+        loads.validate(&self.robot)?;
+        if self.plan.same_structure(loads) {
+            self.plan.set_load_values(loads);
+            self.loads.clone_from(loads);
+        } else {
+            *self = Self::new(self.robot.clone(), loads.clone(), self.settings.clone())?;
+        }
+        Ok(())
+    }
+
+    /// Replace the settings (rebuilds the plan; allocates).
+    pub fn set_settings(&mut self, settings: SolverSettings) -> Result<(), ModelError> {
+        *self = Self::new(self.robot.clone(), self.loads.clone(), settings)?;
+        Ok(())
+    }
+
+    /// Solve in place. Never panics; the status says whether the result is usable.
+    pub fn solve(&mut self, start: Start) -> SolveReport {
+        let rhs0 = self.rhs_count();
+        self.jac_evals = 0;
+        let mut iterations = 0;
+        let mut continuation_steps = 0;
+        let warm = start == Start::Warm && self.has_solution;
+        if !warm {
+            self.cold_guess(1.0);
+        }
+        let (mut status, it) = self.newton(1.0);
+        iterations += it;
+        if !status.is_converged() && self.settings.continuation {
+            let (st, it, steps) = self.continuation();
+            status = st;
+            iterations += it;
+            continuation_steps = steps;
+        }
+        self.has_solution = status.is_converged();
+        self.report = SolveReport {
+            status,
+            iterations,
+            residual: max_abs(&self.res),
+            rhs_evals: self.rhs_count() - rhs0,
+            jacobian_evals: self.jac_evals,
+            continuation_steps,
+            unknowns: self.plan.n_unknowns,
+        };
+        self.report
+    }
+
+    fn rhs_count(&self) -> u64 {
+        self.b64.rhs_evals + self.b3.rhs_evals + self.b6.rhs_evals
+    }
+
+    /// Straight-rod reactions as the starting point, loads scaled by `lam`.
+    fn cold_guess(&mut self, lam: f64) {
+        let p = &self.plan;
+        let (f, m) = p.straight_wrench(lam);
+        let off = if p.closed_form {
+            0
+        } else {
+            for i in 0..3 {
+                self.x[i] = f[i] / p.force_scale;
+            }
+            3
+        };
+        for i in 0..3 {
+            self.x[off + i] = m[i] / p.moment_scale;
+        }
+        let axis = p.base_rot * Vector3::z();
+        for (j, c) in p.cables.iter().enumerate() {
+            if let Some(u) = c.unknowns {
+                let route = &self.robot.cables()[j].route;
+                for (k, &g) in route.iter().enumerate().skip(1) {
+                    let s = self.robot.guides()[g].s;
+                    let q = p.base_r + axis * s + p.base_rot * c.hole_local;
+                    for a in 0..3 {
+                        self.x[u + 3 * (k - 1) + a] = q[a] / p.length;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Residual at `x` (f64 pass) into `res`; `false` when the pass failed.
+    fn eval_at(&mut self, trial: bool, lam: f64) -> bool {
+        let src = if trial { &self.x_trial } else { &self.x };
+        self.b64.x.copy_from_slice(src);
+        match pass(&self.plan, &mut self.b64, lam, None) {
+            Ok(y) => {
+                self.tip = y.r;
+                self.res.copy_from_slice(&self.b64.res);
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// Jacobian at `x` into the LU buffer.
+    fn jacobian(&mut self, lam: f64) -> bool {
+        let n = self.plan.n_unknowns;
+        self.jac_evals += 1;
+        if n <= 3 {
+            jac_chunk::<3>(
+                &self.plan,
+                &self.x,
+                0,
+                lam,
+                &mut self.b3,
+                self.lu.matrix_mut(),
+            )
+        } else {
+            (0..n).step_by(6).all(|c0| {
+                jac_chunk::<6>(
+                    &self.plan,
+                    &self.x,
+                    c0,
+                    lam,
+                    &mut self.b6,
+                    self.lu.matrix_mut(),
+                )
+            })
+        }
+    }
+
+    /// Damped Newton at load scale `lam` from the current `x`.
+    fn newton(&mut self, lam: f64) -> (SolveStatus, usize) {
+        let n = self.plan.n_unknowns;
+        if !self.eval_at(false, lam) {
+            self.res.iter_mut().for_each(|r| *r = f64::INFINITY);
+            return (SolveStatus::NonFinite, 0);
+        }
+        for it in 0..self.settings.max_iterations {
+            if max_abs(&self.res) <= self.settings.tolerance {
+                return (SolveStatus::Converged, it);
+            }
+            if !self.jacobian(lam) {
+                return (SolveStatus::NonFinite, it);
+            }
+            match self.lu.factor() {
+                Some(rc) if rc > 1e-14 => {}
+                _ => return (SolveStatus::IllConditioned, it),
+            }
+            for i in 0..n {
+                self.dx[i] = -self.res[i];
+            }
+            self.lu.solve_in_place(&mut self.dx);
+            let f0 = norm2(&self.res);
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            for _ in 0..30 {
+                for i in 0..n {
+                    self.x_trial[i] = self.x[i] + alpha * self.dx[i];
+                }
+                if self.eval_trial(lam) && norm2(&self.b64.res) < (1.0 - 1e-4 * alpha) * f0 {
+                    accepted = true;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if !accepted {
+                self.eval_at(false, lam);
+                return (SolveStatus::Stalled, it + 1);
+            }
+            std::mem::swap(&mut self.x, &mut self.x_trial);
+            self.res.copy_from_slice(&self.b64.res);
+        }
+        if max_abs(&self.res) <= self.settings.tolerance {
+            return (SolveStatus::Converged, self.settings.max_iterations);
+        }
+        (SolveStatus::MaxIterations, self.settings.max_iterations)
+    }
+
+    fn eval_trial(&mut self, lam: f64) -> bool {
+        self.b64.x.copy_from_slice(&self.x_trial);
+        match pass(&self.plan, &mut self.b64, lam, None) {
+            Ok(y) => {
+                self.tip = y.r;
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// Natural-parameter continuation in the load scale from the unloaded rod.
+    fn continuation(&mut self) -> (SolveStatus, usize, usize) {
+        let mut lam: f64 = 0.0;
+        let mut step = 0.25;
+        let mut iterations = 0;
+        let mut steps = 0;
+        self.cold_guess(0.0);
+        let mut x_ok = self.x.clone();
+        while steps < self.settings.max_continuation_steps {
+            let target = (lam + step).min(1.0);
+            let (st, it) = self.newton(target);
+            iterations += it;
+            steps += 1;
+            if st.is_converged() {
+                lam = target;
+                x_ok.copy_from_slice(&self.x);
+                if lam >= 1.0 {
+                    return (SolveStatus::Converged, iterations, steps);
+                }
+                step *= 1.5;
+            } else {
+                self.x.copy_from_slice(&x_ok);
+                step *= 0.5;
+                if step < 1e-4 {
+                    return (st, iterations, steps);
+                }
+            }
+        }
+        let (st, it) = self.newton(1.0);
+        (st, iterations + it, steps)
+    }
+
+    /// Cable lengths of the last evaluated point (m), indexed like `robot.cables`.
+    /// No allocation.
+    pub fn cable_lengths_into(&self, out: &mut [f64]) {
+        for (j, (c, o)) in self.plan.cables.iter().zip(out.iter_mut()).enumerate() {
+            *o = path_length(&c.base_hole, &self.b64.holes[j]);
+        }
+    }
+
+    /// Base internal force and moment of the current solution `(n(0), m(0))`.
+    pub fn base_wrench(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let p = &self.plan;
+        if p.closed_form {
+            let m = Vector3::new(self.x[0], self.x[1], self.x[2]) * p.moment_scale;
+            (p.closed_n0, m)
+        } else {
+            (
+                Vector3::new(self.x[0], self.x[1], self.x[2]) * p.force_scale,
+                Vector3::new(self.x[3], self.x[4], self.x[5]) * p.moment_scale,
+            )
+        }
+    }
+
+    /// Tip position of the last evaluated point (m).
+    pub fn tip_position(&self) -> Vector3<f64> {
+        self.tip
+    }
+
+    /// Full solution of the current point (allocates: samples, poses, lengths).
+    pub fn solution(&mut self) -> Solution {
+        let mut rec = Recording::default();
+        self.b64.x.copy_from_slice(&self.x);
+        let _ = pass(&self.plan, &mut self.b64, 1.0, Some(&mut rec));
+        let guides = self
+            .robot
+            .guides()
+            .iter()
+            .zip(&rec.guides)
+            .map(|(g, pose)| GuidePose {
+                section: g.section,
+                index: g.index,
+                s: g.s,
+                pose: *pose,
+            })
+            .collect();
+        let cables = self
+            .robot
+            .cables()
+            .iter()
+            .zip(&self.plan.cables)
+            .enumerate()
+            .map(|(j, (c, pc))| CableLength {
+                name: c.name.clone(),
+                total_m: path_length(&pc.base_hole, &self.b64.holes[j]),
+                segments_m: segments(&pc.base_hole, &self.b64.holes[j]),
+            })
+            .collect();
+        let (base_force, base_moment) = self.base_wrench();
+        Solution {
+            report: self.report,
+            samples: rec.samples,
+            section_tips: rec.section_tips,
+            guides,
+            cables,
+            base_force,
+            base_moment,
+        }
+    }
+}
+
+fn jac_chunk<const N: usize>(
+    plan: &Plan,
+    x: &[f64],
+    c0: usize,
+    lam: f64,
+    buf: &mut PassBuf<Dual<N>>,
+    jac: &mut [f64],
+) -> bool {
+    let n = x.len();
+    for (i, (xi, bi)) in x.iter().zip(buf.x.iter_mut()).enumerate() {
+        *bi = if i >= c0 && i < c0 + N {
+            Dual::variable(*xi, i - c0)
+        } else {
+            Dual::constant(*xi)
+        };
+    }
+    if pass(plan, buf, lam, None).is_err() {
+        return false;
+    }
+    let width = N.min(n - c0);
+    for r in 0..n {
+        for k in 0..width {
+            jac[r * n + c0 + k] = buf.res[r].d[k];
+        }
+    }
+    true
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |a, x| {
+        if x.is_nan() {
+            f64::INFINITY
+        } else {
+            a.max(x.abs())
+        }
+    })
+}
+
+fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
