@@ -3,6 +3,7 @@
 
 pub mod cables;
 pub mod error;
+pub mod files;
 pub mod integrate;
 pub mod loads;
 pub mod math;
@@ -10,11 +11,13 @@ pub mod robot;
 pub mod rod;
 pub mod settings;
 pub mod statics;
+pub mod validation;
 
 pub use nalgebra;
 
 pub use cables::CableLength;
 pub use error::ModelError;
+pub use files::{Scene, SceneError};
 pub use loads::{Frame, Loads, PointLoad};
 pub use robot::{Robot, RobotSpec};
 pub use rod::{CrossSection, Material};

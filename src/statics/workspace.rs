@@ -12,6 +12,11 @@ use crate::robot::Robot;
 use crate::settings::SolverSettings;
 use nalgebra::Vector3;
 
+/// Newton iterations a cold start gets before continuation takes over.
+const COLD_BUDGET: usize = 4;
+/// Newton iterations per continuation step.
+const CONTINUATION_BUDGET: usize = 10;
+
 /// Where Newton starts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Start {
@@ -127,7 +132,14 @@ impl Workspace {
         if !warm {
             self.cold_guess(1.0);
         }
-        let (mut status, it) = self.newton(1.0);
+        // A cold Newton from the straight rod is cut short (heavy damping means it is
+        // far from the basin); continuation with a secant predictor is then cheaper.
+        let budget = if warm || !self.settings.continuation {
+            self.settings.max_iterations
+        } else {
+            COLD_BUDGET.min(self.settings.max_iterations)
+        };
+        let (mut status, it) = self.newton(1.0, budget);
         iterations += it;
         if !status.is_converged() && self.settings.continuation {
             let (st, it, steps) = self.continuation();
@@ -224,13 +236,13 @@ impl Workspace {
     }
 
     /// Damped Newton at load scale `lam` from the current `x`.
-    fn newton(&mut self, lam: f64) -> (SolveStatus, usize) {
+    fn newton(&mut self, lam: f64, max_iterations: usize) -> (SolveStatus, usize) {
         let n = self.plan.n_unknowns;
         if !self.eval_at(false, lam) {
             self.res.iter_mut().for_each(|r| *r = f64::INFINITY);
             return (SolveStatus::NonFinite, 0);
         }
-        for it in 0..self.settings.max_iterations {
+        for it in 0..max_iterations {
             if max_abs(&self.res) <= self.settings.tolerance {
                 return (SolveStatus::Converged, it);
             }
@@ -266,9 +278,9 @@ impl Workspace {
             self.res.copy_from_slice(&self.b64.res);
         }
         if max_abs(&self.res) <= self.settings.tolerance {
-            return (SolveStatus::Converged, self.settings.max_iterations);
+            return (SolveStatus::Converged, max_iterations);
         }
-        (SolveStatus::MaxIterations, self.settings.max_iterations)
+        (SolveStatus::MaxIterations, max_iterations)
     }
 
     fn eval_trial(&mut self, lam: f64) -> bool {
@@ -282,36 +294,75 @@ impl Workspace {
         }
     }
 
-    /// Natural-parameter continuation in the load scale from the unloaded rod.
+    /// Natural-parameter continuation in the load scale from the unloaded rod, with a
+    /// secant predictor from the last two converged load levels.
     fn continuation(&mut self) -> (SolveStatus, usize, usize) {
         let mut lam: f64 = 0.0;
-        let mut step = 0.25;
+        let mut step: f64 = 0.25;
         let mut iterations = 0;
         let mut steps = 0;
         self.cold_guess(0.0);
         let mut x_ok = self.x.clone();
+        let mut x_prev = self.x.clone();
+        let mut lam_prev: f64 = 0.0;
+        let per_step = self.settings.max_iterations.min(CONTINUATION_BUDGET);
         while steps < self.settings.max_continuation_steps {
             let target = (lam + step).min(1.0);
-            let (st, it) = self.newton(target);
+            if lam > lam_prev {
+                let k = (target - lam) / (lam - lam_prev);
+                for i in 0..self.x.len() {
+                    self.x[i] = x_ok[i] + k * (x_ok[i] - x_prev[i]);
+                }
+            }
+            let (st, it) = self.newton(target, per_step);
             iterations += it;
             steps += 1;
             if st.is_converged() {
+                x_prev.copy_from_slice(&x_ok);
+                lam_prev = lam;
                 lam = target;
                 x_ok.copy_from_slice(&self.x);
                 if lam >= 1.0 {
                     return (SolveStatus::Converged, iterations, steps);
                 }
-                step *= 1.5;
+                if it <= 4 {
+                    step *= 2.0;
+                }
             } else {
                 self.x.copy_from_slice(&x_ok);
                 step *= 0.5;
                 if step < 1e-4 {
+                    self.eval_at(false, 1.0);
                     return (st, iterations, steps);
                 }
             }
         }
-        let (st, it) = self.newton(1.0);
+        self.x.copy_from_slice(&x_ok);
+        let (st, it) = self.newton(1.0, self.settings.max_iterations);
         (st, iterations + it, steps)
+    }
+
+    /// Current scaled shooting unknowns (layout in the `statics` module docs).
+    pub fn unknowns_vector(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// Scaled shooting residual at scaled unknowns `x` into `out` (diagnostics and
+    /// tests); `false` when the integration failed.
+    pub fn shooting_residual(&mut self, x: &[f64], out: &mut [f64]) -> bool {
+        self.x_trial.copy_from_slice(x);
+        let ok = self.eval_trial(1.0);
+        out.copy_from_slice(&self.b64.res);
+        ok
+    }
+
+    /// Exact (dual-number) shooting Jacobian at `x`, row-major `n x n`.
+    pub fn shooting_jacobian(&mut self, x: &[f64]) -> Option<Vec<f64>> {
+        let saved = std::mem::replace(&mut self.x, x.to_vec());
+        let ok = self.jacobian(1.0);
+        self.x = saved;
+        let n = self.plan.n_unknowns;
+        ok.then(|| self.lu.matrix_mut()[..n * n].to_vec())
     }
 
     /// Cable lengths of the last evaluated point (m), indexed like `robot.cables`.

@@ -1,0 +1,7 @@
+//! Files layer: scene files (TOML or JSON) and the thesis reference tables.
+//! The core (everything above this module) never reads files.
+
+mod scene;
+pub mod thesis;
+
+pub use scene::{Scene, SceneError};

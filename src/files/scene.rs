@@ -1,0 +1,130 @@
+//! Scene files: robot + loads + numerics in one TOML or JSON document, SI units.
+//!
+//! Every table uses `deny_unknown_fields`, so a misspelt key fails loudly with its
+//! name and position; numbers are validated when the scene is turned into a
+//! [`Robot`], with the field path in the error.
+
+use crate::error::ModelError;
+use crate::loads::Loads;
+use crate::robot::{Robot, RobotSpec};
+use crate::settings::SolverSettings;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// A complete, reproducible forward problem.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Free-text description.
+    #[serde(default)]
+    pub description: String,
+    /// The robot.
+    pub robot: RobotSpec,
+    /// Loads (default: gravity `[0, 0, -9.81]` only).
+    #[serde(default)]
+    pub loads: Loads,
+    /// Solver settings (defaults documented on [`SolverSettings`]).
+    #[serde(default)]
+    pub numerics: SolverSettings,
+}
+
+/// Why a scene could not be read.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax or schema error (the message names the key and line).
+    #[error("{path}: {message}")]
+    Toml {
+        /// File.
+        path: PathBuf,
+        /// Parser message with line, column and key.
+        message: String,
+    },
+    /// JSON syntax or schema error (the message names the key, line and column).
+    #[error("{path}: {message}")]
+    Json {
+        /// File.
+        path: PathBuf,
+        /// Parser message.
+        message: String,
+    },
+    /// Parsed, but a value is invalid.
+    #[error("{path}: {source}")]
+    Invalid {
+        /// File.
+        path: PathBuf,
+        /// The offending field and value.
+        source: ModelError,
+    },
+}
+
+impl Scene {
+    /// Parse TOML text.
+    pub fn from_toml_str(text: &str) -> Result<Self, SceneError> {
+        toml::from_str(text).map_err(|e| SceneError::Toml {
+            path: "<toml>".into(),
+            message: e.to_string(),
+        })
+    }
+    /// Parse JSON text.
+    pub fn from_json_str(text: &str) -> Result<Self, SceneError> {
+        serde_json::from_str(text).map_err(|e| SceneError::Json {
+            path: "<json>".into(),
+            message: e.to_string(),
+        })
+    }
+    /// Read a `.toml` or `.json` file (by extension; anything else is tried as TOML).
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.into(),
+            source,
+        })?;
+        let scene = if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        {
+            Self::from_json_str(&text)
+        } else {
+            Self::from_toml_str(&text)
+        };
+        let scene = scene.map_err(|e| match e {
+            SceneError::Toml { message, .. } => SceneError::Toml {
+                path: path.into(),
+                message,
+            },
+            SceneError::Json { message, .. } => SceneError::Json {
+                path: path.into(),
+                message,
+            },
+            other => other,
+        })?;
+        scene.validate().map_err(|source| SceneError::Invalid {
+            path: path.into(),
+            source,
+        })?;
+        Ok(scene)
+    }
+    /// Validate robot, loads and numerics together.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let robot = Robot::new(self.robot.clone())?;
+        self.loads.validate(&robot)?;
+        self.numerics.validate()
+    }
+    /// The validated robot.
+    pub fn build_robot(&self) -> Result<Robot, ModelError> {
+        Robot::new(self.robot.clone())
+    }
+    /// Serialize to TOML.
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_default()
+    }
+}

@@ -1,0 +1,124 @@
+//! Reader for the thesis reference tables in `data/thesis/*.csv` (units in the
+//! column names: `_cm`, `_g`, `_pct`). Conversion to SI happens in the callers'
+//! accessors ([`Table::col_si`]), never in the model.
+
+use std::path::Path;
+use thiserror::Error;
+
+/// A numeric CSV table with a header row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// Column names.
+    pub columns: Vec<String>,
+    /// Rows of numbers.
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// Why a table could not be read.
+#[derive(Debug, Error)]
+pub enum TableError {
+    /// I/O.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// File.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// A cell is not a number, or a row has the wrong width.
+    #[error("{path}:{line}: {why}")]
+    Parse {
+        /// File.
+        path: String,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        why: String,
+    },
+    /// A requested column is absent.
+    #[error("{path}: no column `{column}`")]
+    NoColumn {
+        /// File.
+        path: String,
+        /// Column.
+        column: String,
+    },
+}
+
+impl Table {
+    /// Parse CSV text (comma-separated, one header line, `#` comment lines skipped).
+    pub fn parse(text: &str, path: &str) -> Result<Self, TableError> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+        let (_, header) = lines.next().ok_or(TableError::Parse {
+            path: path.into(),
+            line: 1,
+            why: "empty file".into(),
+        })?;
+        let columns: Vec<String> = header.split(',').map(|c| c.trim().to_string()).collect();
+        let mut rows = Vec::new();
+        for (i, l) in lines {
+            let cells: Vec<&str> = l.split(',').map(str::trim).collect();
+            if cells.len() != columns.len() {
+                return Err(TableError::Parse {
+                    path: path.into(),
+                    line: i + 1,
+                    why: format!("{} cells, header has {}", cells.len(), columns.len()),
+                });
+            }
+            let row = cells
+                .iter()
+                .zip(&columns)
+                .map(|(c, name)| {
+                    c.parse::<f64>().map_err(|_| TableError::Parse {
+                        path: path.into(),
+                        line: i + 1,
+                        why: format!("column `{name}`: `{c}` is not a number"),
+                    })
+                })
+                .collect::<Result<Vec<f64>, _>>()?;
+            rows.push(row);
+        }
+        Ok(Self { columns, rows })
+    }
+
+    /// Read a CSV file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, TableError> {
+        let p = path.as_ref();
+        let text = std::fs::read_to_string(p).map_err(|source| TableError::Io {
+            path: p.display().to_string(),
+            source,
+        })?;
+        Self::parse(&text, &p.display().to_string())
+    }
+
+    /// A column as printed.
+    pub fn col(&self, name: &str) -> Result<Vec<f64>, TableError> {
+        let k =
+            self.columns
+                .iter()
+                .position(|c| c == name)
+                .ok_or_else(|| TableError::NoColumn {
+                    path: String::new(),
+                    column: name.into(),
+                })?;
+        Ok(self.rows.iter().map(|r| r[k]).collect())
+    }
+
+    /// A column converted to SI from the unit suffix of its name
+    /// (`_cm` -> m, `_mm` -> m, `_g` -> kg; anything else unchanged).
+    pub fn col_si(&self, name: &str) -> Result<Vec<f64>, TableError> {
+        let k = if name.ends_with("_cm") {
+            1e-2
+        } else if name.ends_with("_mm") {
+            1e-3
+        } else if name.ends_with("_g") {
+            1e-3
+        } else {
+            1.0
+        };
+        Ok(self.col(name)?.into_iter().map(|v| v * k).collect())
+    }
+}
