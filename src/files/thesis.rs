@@ -112,9 +112,7 @@ impl Table {
     pub fn col_si(&self, name: &str) -> Result<Vec<f64>, TableError> {
         let k = if name.ends_with("_cm") {
             1e-2
-        } else if name.ends_with("_mm") {
-            1e-3
-        } else if name.ends_with("_g") {
+        } else if name.ends_with("_mm") || name.ends_with("_g") {
             1e-3
         } else {
             1.0
