@@ -17,6 +17,11 @@ const COLD_BUDGET: usize = 4;
 /// Newton iterations per continuation step.
 const CONTINUATION_BUDGET: usize = 10;
 
+/// A reused (chord) Jacobian's full step must shrink `||r||_2` by this factor.
+const CHORD_CONTRACTION: f64 = 0.1;
+/// Chord steps allowed per Jacobian before it is refreshed anyway.
+const MAX_CHORD_STEPS: usize = 8;
+
 /// Where Newton starts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Start {
@@ -44,6 +49,8 @@ pub struct Workspace {
     b3: PassBuf<Dual<3>>,
     b6: PassBuf<Dual<6>>,
     has_solution: bool,
+    /// `lu` holds a factorised Jacobian of this plan (possibly from an earlier point).
+    lu_valid: bool,
     tip: Vector3<f64>,
     report: SolveReport,
     jac_evals: u64,
@@ -68,6 +75,7 @@ impl Workspace {
             settings,
             plan,
             has_solution: false,
+            lu_valid: false,
             tip: Vector3::zeros(),
             report: SolveReport {
                 status: SolveStatus::NonFinite,
@@ -131,6 +139,7 @@ impl Workspace {
         let warm = start == Start::Warm && self.has_solution;
         if !warm {
             self.cold_guess(1.0);
+            self.lu_valid = false;
         }
         // A cold Newton from the straight rod is cut short (heavy damping means it is
         // far from the basin); continuation with a secant predictor is then cheaper.
@@ -235,29 +244,63 @@ impl Workspace {
         }
     }
 
-    /// Damped Newton at load scale `lam` from the current `x`.
+    /// Newton at load scale `lam` from the current `x`.
+    ///
+    /// The Jacobian is exact (dual numbers) where it is evaluated, and is reused for
+    /// further full steps while they contract the residual by at least
+    /// [`CHORD_CONTRACTION`] (the chord method; warm starts reuse the previous solve's
+    /// factorisation). A fresh Jacobian's step gets a backtracking line search on
+    /// `||r||_2`; a stale one that does not contract is discarded and refreshed.
     fn newton(&mut self, lam: f64, max_iterations: usize) -> (SolveStatus, usize) {
         let n = self.plan.n_unknowns;
         if !self.eval_at(false, lam) {
             self.res.iter_mut().for_each(|r| *r = f64::INFINITY);
             return (SolveStatus::NonFinite, 0);
         }
-        for it in 0..max_iterations {
+        let mut it = 0;
+        let mut jacobians = 0;
+        let mut chord_steps = 0;
+        loop {
             if max_abs(&self.res) <= self.settings.tolerance {
                 return (SolveStatus::Converged, it);
             }
-            if !self.jacobian(lam) {
-                return (SolveStatus::NonFinite, it);
+            if chord_steps >= MAX_CHORD_STEPS {
+                self.lu_valid = false;
             }
-            match self.lu.factor() {
-                Some(rc) if rc > 1e-14 => {}
-                _ => return (SolveStatus::IllConditioned, it),
+            let fresh = !self.lu_valid;
+            if fresh && jacobians >= max_iterations {
+                return (SolveStatus::MaxIterations, it);
+            }
+            it += 1;
+            if fresh {
+                jacobians += 1;
+                chord_steps = 0;
+                if !self.jacobian(lam) {
+                    return (SolveStatus::NonFinite, it);
+                }
+                match self.lu.factor() {
+                    Some(rc) if rc > 1e-14 => self.lu_valid = true,
+                    _ => return (SolveStatus::IllConditioned, it),
+                }
             }
             for i in 0..n {
                 self.dx[i] = -self.res[i];
             }
             self.lu.solve_in_place(&mut self.dx);
             let f0 = norm2(&self.res);
+            if !fresh {
+                for i in 0..n {
+                    self.x_trial[i] = self.x[i] + self.dx[i];
+                }
+                chord_steps += 1;
+                if self.eval_trial(lam) && norm2(&self.b64.res) < CHORD_CONTRACTION * f0 {
+                    std::mem::swap(&mut self.x, &mut self.x_trial);
+                    self.res.copy_from_slice(&self.b64.res);
+                } else {
+                    self.lu_valid = false;
+                }
+                continue;
+            }
             let mut alpha = 1.0;
             let mut accepted = false;
             for _ in 0..30 {
@@ -272,17 +315,19 @@ impl Workspace {
             }
             if !accepted {
                 self.eval_at(false, lam);
-                return (SolveStatus::Stalled, it + 1);
+                self.lu_valid = false;
+                return (SolveStatus::Stalled, it);
             }
             std::mem::swap(&mut self.x, &mut self.x_trial);
             self.res.copy_from_slice(&self.b64.res);
+            if alpha < 1.0 {
+                // far from the solution: the Jacobian changes quickly, do not reuse it
+                self.lu_valid = false;
+            }
         }
-        if max_abs(&self.res) <= self.settings.tolerance {
-            return (SolveStatus::Converged, max_iterations);
-        }
-        (SolveStatus::MaxIterations, max_iterations)
     }
 
+    /// Residual at `x_trial` into `b64.res`; `false` when the pass failed.
     fn eval_trial(&mut self, lam: f64) -> bool {
         self.b64.x.copy_from_slice(&self.x_trial);
         match pass(&self.plan, &mut self.b64, lam, None) {
@@ -302,6 +347,7 @@ impl Workspace {
         let mut iterations = 0;
         let mut steps = 0;
         self.cold_guess(0.0);
+        self.lu_valid = false;
         let mut x_ok = self.x.clone();
         let mut x_prev = self.x.clone();
         let mut lam_prev: f64 = 0.0;
@@ -360,6 +406,7 @@ impl Workspace {
     pub fn shooting_jacobian(&mut self, x: &[f64]) -> Option<Vec<f64>> {
         let saved = std::mem::replace(&mut self.x, x.to_vec());
         let ok = self.jacobian(1.0);
+        self.lu_valid = false;
         self.x = saved;
         let n = self.plan.n_unknowns;
         ok.then(|| self.lu.matrix_mut()[..n * n].to_vec())
