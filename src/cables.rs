@@ -7,6 +7,7 @@
 //! The thesis's sum (`L = sum_{i=2}^{n-1} ||T_i d_i - T_{i-1} d_{i-1}||`) has index
 //! typos; here every chord from the base plate to the termination disk is counted.
 
+use crate::math::Real;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -43,4 +44,16 @@ pub fn segments(base: &Vector3<f64>, holes: &[Vector3<f64>]) -> Vec<f64> {
             l
         })
         .collect()
+}
+
+/// [`path_length`] over any scalar (dual numbers give exact length derivatives).
+pub fn path_length_t<T: Real>(base: &Vector3<T>, holes: &[Vector3<T>]) -> T {
+    let mut prev = base;
+    let mut total = T::zero();
+    for p in holes {
+        let d = p - prev;
+        total += d.dot(&d).sqrt();
+        prev = p;
+    }
+    total
 }

@@ -3,6 +3,7 @@
 
 pub mod cables;
 pub mod error;
+pub mod estimate;
 pub mod files;
 pub mod integrate;
 pub mod loads;

@@ -11,6 +11,7 @@ mod plan;
 mod workspace;
 
 pub use pass::{Pose, Sample};
+pub use plan::ParamSite;
 pub use workspace::{Start, Workspace};
 
 use crate::cables::CableLength;

@@ -7,7 +7,7 @@
 //! not yet integrated, disk). Residuals: `m(L+)/M` (and `n(L+)/F`), plus computed
 //! minus assumed hole positions `/L`. `F = EI/L^2`, `M = EI/L`.
 
-use super::plan::{Event, Plan};
+use super::plan::{Event, ParamSite, Plan};
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
 use crate::math::Real;
 use nalgebra::{Matrix3, Vector3};
@@ -53,6 +53,8 @@ pub(crate) struct Recording {
 #[derive(Clone, Debug)]
 pub(crate) struct PassBuf<T: Real> {
     pub x: Vec<T>,
+    /// Load parameters `theta` (see [`ParamSite`]).
+    pub theta: Vec<T>,
     pub res: Vec<T>,
     /// Hole positions per cable per route disk (world).
     pub holes: Vec<Vec<Vector3<T>>>,
@@ -64,6 +66,7 @@ impl<T: Real> PassBuf<T> {
         let z = Vector3::new(T::zero(), T::zero(), T::zero());
         Self {
             x: vec![T::zero(); plan.n_unknowns],
+            theta: vec![T::zero(); plan.params.len()],
             res: vec![T::zero(); plan.n_unknowns],
             holes: plan.cables.iter().map(|c| vec![z; c.len]).collect(),
             rhs_evals: 0,
@@ -104,6 +107,7 @@ pub(crate) fn pass<T: Real>(
     mut rec: Option<&mut Recording>,
 ) -> Result<State<T>, PassError> {
     let (fs, ms, ls) = (plan.force_scale, plan.moment_scale, plan.length);
+    debug_assert_eq!(buf.theta.len(), plan.params.len());
     let mut y = State {
         r: v3::<T>(&plan.base_r),
         rot: plan.base_rot.map(T::cst),
@@ -111,7 +115,15 @@ pub(crate) fn pass<T: Real>(
         m: Vector3::zeros_generic_t(),
     };
     if plan.closed_form {
-        y.n = v3(&(plan.closed_n0 * load_scale));
+        let mut n0 = v3::<T>(&plan.closed_n0);
+        for (k, p) in plan.params.iter().enumerate() {
+            match *p {
+                ParamSite::Force { axis, .. } => n0[axis] += buf.theta[k],
+                ParamSite::Mass { .. } => n0 += v3::<T>(&plan.gravity).map(|g| g * buf.theta[k]),
+                _ => {}
+            }
+        }
+        y.n = n0.map(|x| x.scale(load_scale));
         y.m = Vector3::new(buf.x[0], buf.x[1], buf.x[2]).map(|x| x.scale(ms));
     } else {
         y.n = Vector3::new(buf.x[0], buf.x[1], buf.x[2]).map(|x| x.scale(fs));
@@ -280,7 +292,17 @@ fn apply_event<T: Real>(
             } else {
                 (v3::<T>(&p.force), v3::<T>(&p.torque))
             };
+            let mut tau = tau;
             f += v3::<T>(&(plan.gravity * p.mass));
+            for &k in &plan.point_params[i] {
+                let th = buf.theta[k];
+                match plan.params[k] {
+                    ParamSite::Force { axis, .. } => f[axis] += th,
+                    ParamSite::Torque { axis, .. } => tau[axis] += th,
+                    ParamSite::Mass { .. } => f += v3::<T>(&plan.gravity).map(|g| g * th),
+                    ParamSite::Tension { .. } => {}
+                }
+            }
             y.n -= f.map(|x| x.scale(load_scale));
             y.m -= tau.map(|x| x.scale(load_scale));
         }
@@ -311,20 +333,24 @@ fn apply_event<T: Real>(
                 if !c.tensioned {
                     continue;
                 }
-                let t = c.tension * load_scale;
+                let mut t = T::cst(c.tension);
+                if let Some(k) = plan.tension_param[j] {
+                    t += buf.theta[k];
+                }
+                let t = t.scale(load_scale);
                 let prev = if k == 0 {
                     v3::<T>(&c.base_hole)
                 } else {
                     buf.holes[j][k - 1]
                 };
                 // the cable pulls the disk along both straight chords (thesis 3.8.1 routing)
-                let mut f = unit(prev - p).map(|x| x.scale(t));
+                let mut f = unit(prev - p).map(|x| x * t);
                 if k + 1 < c.len {
                     if let Some(u) = c.unknowns {
                         let i0 = u + 3 * k;
                         let next = Vector3::new(buf.x[i0], buf.x[i0 + 1], buf.x[i0 + 2])
                             .map(|x| x.scale(ls));
-                        f += unit(next - p).map(|x| x.scale(t));
+                        f += unit(next - p).map(|x| x * t);
                     }
                 }
                 y.n -= f;

@@ -47,6 +47,23 @@ pub(crate) struct PlanPoint {
     pub mass: f64,
 }
 
+/// A load parameter `theta_k` the pass can differentiate with respect to (the
+/// estimator's unknowns). Each adds to a load of the scene.
+// Fields: `point` indexes `loads.point`, `axis` is 0/1/2 (world x/y/z), `cable`
+// indexes `robot.cables`.
+#[allow(missing_docs)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamSite {
+    /// World-frame force component (N) added at point load `point`, axis 0/1/2.
+    Force { point: usize, axis: usize },
+    /// World-frame torque component (N m) added at point load `point`.
+    Torque { point: usize, axis: usize },
+    /// Payload mass (kg) added at point load `point`.
+    Mass { point: usize },
+    /// Tension (N) added to cable `cable`.
+    Tension { cable: usize },
+}
+
 /// One cable as the pass sees it.
 #[derive(Clone, Debug)]
 pub(crate) struct PlanCable {
@@ -92,6 +109,12 @@ pub(crate) struct Plan {
     pub integrator: Integrator,
     pub n_sections: usize,
     pub n_guides: usize,
+    /// Load parameters `theta`.
+    pub params: Vec<ParamSite>,
+    /// Parameters acting at each point load.
+    pub point_params: Vec<Vec<usize>>,
+    /// Tension parameter of each cable.
+    pub tension_param: Vec<Option<usize>>,
 }
 
 impl Plan {
@@ -99,6 +122,7 @@ impl Plan {
         robot: &Robot,
         loads: &Loads,
         settings: &SolverSettings,
+        params: &[ParamSite],
     ) -> Result<Self, ModelError> {
         settings.validate()?;
         loads.validate(robot)?;
@@ -195,14 +219,40 @@ impl Plan {
         let mut guide_cables = vec![Vec::new(); robot.guides().len()];
         let mut cables = Vec::with_capacity(robot.cables().len());
         let body_loads = loads.point.iter().any(|p| p.frame == Frame::Body);
-        let tensioned = (0..robot.cables().len()).any(|j| loads.tension(j) > 0.0);
+        let mut point_params = vec![Vec::new(); loads.point.len()];
+        let mut tension_param = vec![None; robot.cables().len()];
+        for (k, p) in params.iter().enumerate() {
+            let (index, count, field) = match *p {
+                ParamSite::Force { point, .. }
+                | ParamSite::Torque { point, .. }
+                | ParamSite::Mass { point } => {
+                    (point, loads.point.len(), "estimate parameter point load")
+                }
+                ParamSite::Tension { cable } => {
+                    (cable, robot.cables().len(), "estimate parameter cable")
+                }
+            };
+            if index >= count {
+                return Err(ModelError::BadIndex {
+                    field: field.into(),
+                    index,
+                    count,
+                });
+            }
+            match *p {
+                ParamSite::Tension { cable } => tension_param[cable] = Some(k),
+                _ => point_params[index].push(k),
+            }
+        }
+        let is_tensioned = |j: usize| loads.tension(j) > 0.0 || tension_param[j].is_some();
+        let tensioned = (0..robot.cables().len()).any(is_tensioned);
         let closed_form = !body_loads && !tensioned;
         let mut n_unknowns = if closed_form { 3 } else { 6 };
         for (j, c) in robot.cables().iter().enumerate() {
             for (k, &g) in c.route.iter().enumerate() {
                 guide_cables[g].push((j, k));
             }
-            let unknowns = if loads.tension(j) > 0.0 && c.route.len() > 1 {
+            let unknowns = if is_tensioned(j) && c.route.len() > 1 {
                 let u = n_unknowns;
                 n_unknowns += 3 * (c.route.len() - 1);
                 Some(u)
@@ -211,7 +261,7 @@ impl Plan {
             };
             cables.push(PlanCable {
                 tension: loads.tension(j),
-                tensioned: loads.tension(j) > 0.0,
+                tensioned: is_tensioned(j),
                 base_hole: robot.base_position() + robot.base_rotation() * c.base_hole,
                 hole_local: robot.guides()[c.route[0]].holes[c.hole],
                 len: c.route.len(),
@@ -242,6 +292,9 @@ impl Plan {
             integrator: settings.integrator,
             n_sections: robot.sections().len(),
             n_guides: robot.guides().len(),
+            params: params.to_vec(),
+            point_params,
+            tension_param,
         };
         plan.points = loads
             .point
@@ -268,11 +321,9 @@ impl Plan {
                 .zip(&loads.point)
                 .all(|(pp, p)| pp.section == p.section && pp.body == (p.frame == Frame::Body))
             && loads.tensions_n.len() <= self.cables.len()
-            && self
-                .cables
-                .iter()
-                .enumerate()
-                .all(|(j, c)| (loads.tension(j) > 0.0) == c.tensioned)
+            && self.cables.iter().enumerate().all(|(j, c)| {
+                (loads.tension(j) > 0.0 || self.tension_param[j].is_some()) == c.tensioned
+            })
     }
 
     /// Copy load values (no allocation). The structure must match.

@@ -2,9 +2,9 @@
 //! dual-number Jacobian, backtracking line search, warm starts, load continuation.
 
 use super::pass::{pass, PassBuf, Recording};
-use super::plan::Plan;
+use super::plan::{ParamSite, Plan};
 use super::{GuidePose, Solution, SolveReport, SolveStatus};
-use crate::cables::{path_length, segments, CableLength};
+use crate::cables::{path_length, path_length_t, segments, CableLength};
 use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::math::{DenseLu, Dual};
@@ -49,6 +49,11 @@ pub struct Workspace {
     b3: PassBuf<Dual<3>>,
     b6: PassBuf<Dual<6>>,
     has_solution: bool,
+    /// d(shooting residual)/d[x; theta], row-major `n x (n + p)`.
+    sens_s: Vec<f64>,
+    /// d(cable length)/d[x; theta], row-major `c x (n + p)`.
+    sens_m: Vec<f64>,
+    sens_col: Vec<f64>,
     /// `lu` holds a factorised Jacobian of this plan (possibly from an earlier point).
     lu_valid: bool,
     tip: Vector3<f64>,
@@ -59,9 +64,24 @@ pub struct Workspace {
 impl Workspace {
     /// Validate and build the plan and buffers.
     pub fn new(robot: Robot, loads: Loads, settings: SolverSettings) -> Result<Self, ModelError> {
-        let plan = Plan::new(&robot, &loads, &settings)?;
+        Self::with_params(robot, loads, settings, &[])
+    }
+
+    /// Like [`Workspace::new`], with load parameters `theta` that add to the scene's
+    /// loads (all zero initially; see [`Workspace::set_theta`]).
+    pub fn with_params(
+        robot: Robot,
+        loads: Loads,
+        settings: SolverSettings,
+        params: &[ParamSite],
+    ) -> Result<Self, ModelError> {
+        let plan = Plan::new(&robot, &loads, &settings, params)?;
         let n = plan.n_unknowns;
+        let (p, c) = (params.len(), robot.cables().len());
         Ok(Self {
+            sens_s: vec![0.0; n * (n + p)],
+            sens_m: vec![0.0; c * (n + p)],
+            sens_col: vec![0.0; n],
             b64: PassBuf::new(&plan),
             b3: PassBuf::new(&plan),
             b6: PassBuf::new(&plan),
@@ -119,9 +139,115 @@ impl Workspace {
             self.plan.set_load_values(loads);
             self.loads.clone_from(loads);
         } else {
-            *self = Self::new(self.robot.clone(), loads.clone(), self.settings.clone())?;
+            let theta = self.b64.theta.clone();
+            let params = self.plan.params.clone();
+            *self = Self::with_params(
+                self.robot.clone(),
+                loads.clone(),
+                self.settings.clone(),
+                &params,
+            )?;
+            self.set_theta(&theta);
         }
         Ok(())
+    }
+
+    /// Load parameters of this workspace.
+    pub fn params(&self) -> &[ParamSite] {
+        &self.plan.params
+    }
+
+    /// Set the load parameters `theta` (units per [`ParamSite`]); no allocation.
+    pub fn set_theta(&mut self, theta: &[f64]) {
+        for (k, v) in theta.iter().enumerate().take(self.plan.params.len()) {
+            self.b64.theta[k] = *v;
+            self.b3.theta[k] = Dual::constant(*v);
+            self.b6.theta[k] = Dual::constant(*v);
+        }
+    }
+
+    /// Current load parameters.
+    pub fn theta(&self) -> &[f64] {
+        &self.b64.theta
+    }
+
+    /// Exact sensitivities of the cable lengths to `theta` at the current (converged)
+    /// point, by implicit differentiation of the shooting problem:
+    /// `dl/dtheta = dl/dtheta|x - dl/dx J_x^-1 dr/dtheta` (all partials from one
+    /// dual-number sweep over `[x; theta]`). Writes `c x p` row-major into `out`,
+    /// the lengths into `lengths`. No allocation. `false` if the sweep failed or
+    /// `J_x` is singular.
+    pub fn length_sensitivities(&mut self, out: &mut [f64], lengths: &mut [f64]) -> bool {
+        let n = self.plan.n_unknowns;
+        let p = self.plan.params.len();
+        let c = self.plan.cables.len();
+        let w = n + p;
+        self.jac_evals += 1;
+        let ok = if w <= 3 {
+            sweep::<3>(
+                &self.plan,
+                &self.x,
+                0,
+                true,
+                &mut self.b3,
+                &mut self.sens_s,
+                &mut self.sens_m,
+                1.0,
+            )
+        } else {
+            (0..w).step_by(6).all(|c0| {
+                sweep::<6>(
+                    &self.plan,
+                    &self.x,
+                    c0,
+                    true,
+                    &mut self.b6,
+                    &mut self.sens_s,
+                    &mut self.sens_m,
+                    1.0,
+                )
+            })
+        };
+        // theta back to constants
+        for k in 0..p {
+            let v = self.b64.theta[k];
+            self.b3.theta[k] = Dual::constant(v);
+            self.b6.theta[k] = Dual::constant(v);
+        }
+        if !ok {
+            return false;
+        }
+        let a = self.lu.matrix_mut();
+        for r in 0..n {
+            a[r * n..(r + 1) * n].copy_from_slice(&self.sens_s[r * w..r * w + n]);
+        }
+        match self.lu.factor() {
+            Some(rc) if rc > 1e-14 => self.lu_valid = true,
+            _ => {
+                self.lu_valid = false;
+                return false;
+            }
+        }
+        for j in 0..c {
+            let len = path_length(&self.plan.cables[j].base_hole, &self.b64.holes[j]);
+            if let Some(l) = lengths.get_mut(j) {
+                *l = len;
+            }
+        }
+        for k in 0..p {
+            for r in 0..n {
+                self.sens_col[r] = self.sens_s[r * w + n + k];
+            }
+            self.lu.solve_in_place(&mut self.sens_col);
+            for j in 0..c {
+                let mut g = self.sens_m[j * w + n + k];
+                for r in 0..n {
+                    g -= self.sens_m[j * w + r] * self.sens_col[r];
+                }
+                out[j * p + k] = g;
+            }
+        }
+        true
     }
 
     /// Replace the settings (rebuilds the plan; allocates).
@@ -221,24 +347,29 @@ impl Workspace {
     fn jacobian(&mut self, lam: f64) -> bool {
         let n = self.plan.n_unknowns;
         self.jac_evals += 1;
+        let jac = self.lu.matrix_mut();
         if n <= 3 {
-            jac_chunk::<3>(
+            sweep::<3>(
                 &self.plan,
                 &self.x,
                 0,
-                lam,
+                false,
                 &mut self.b3,
-                self.lu.matrix_mut(),
+                jac,
+                &mut [],
+                lam,
             )
         } else {
             (0..n).step_by(6).all(|c0| {
-                jac_chunk::<6>(
+                sweep::<6>(
                     &self.plan,
                     &self.x,
                     c0,
-                    lam,
+                    false,
                     &mut self.b6,
-                    self.lu.matrix_mut(),
+                    jac,
+                    &mut [],
+                    lam,
                 )
             })
         }
@@ -481,29 +612,52 @@ impl Workspace {
     }
 }
 
-fn jac_chunk<const N: usize>(
+/// One dual-number pass seeded along directions `c0..c0+N` of `[x; theta]` (theta only
+/// when `with_theta`); writes d(residual) into `jac_s` (`n x w`) and, when `jac_m`
+/// is non-empty, d(cable length) into `jac_m` (`c x w`), `w = n (+ p)`.
+// Plain data in, two output matrices: a struct for the arguments would add nothing.
+#[allow(clippy::too_many_arguments)]
+fn sweep<const N: usize>(
     plan: &Plan,
     x: &[f64],
     c0: usize,
-    lam: f64,
+    with_theta: bool,
     buf: &mut PassBuf<Dual<N>>,
-    jac: &mut [f64],
+    jac_s: &mut [f64],
+    jac_m: &mut [f64],
+    lam: f64,
 ) -> bool {
     let n = x.len();
-    for (i, (xi, bi)) in x.iter().zip(buf.x.iter_mut()).enumerate() {
-        *bi = if i >= c0 && i < c0 + N {
-            Dual::variable(*xi, i - c0)
+    let p = if with_theta { buf.theta.len() } else { 0 };
+    let w = n + p;
+    let seed = |i: usize, v: f64| {
+        if i >= c0 && i < c0 + N {
+            Dual::variable(v, i - c0)
         } else {
-            Dual::constant(*xi)
-        };
+            Dual::constant(v)
+        }
+    };
+    for (i, (xi, bi)) in x.iter().zip(buf.x.iter_mut()).enumerate() {
+        *bi = seed(i, *xi);
+    }
+    for k in 0..p {
+        buf.theta[k] = seed(n + k, buf.theta[k].v);
     }
     if pass(plan, buf, lam, None).is_err() {
         return false;
     }
-    let width = N.min(n - c0);
+    let width = N.min(w - c0);
     for r in 0..n {
         for k in 0..width {
-            jac[r * n + c0 + k] = buf.res[r].d[k];
+            jac_s[r * w + c0 + k] = buf.res[r].d[k];
+        }
+    }
+    if !jac_m.is_empty() {
+        for (j, c) in plan.cables.iter().enumerate() {
+            let l = path_length_t(&c.base_hole.map(Dual::constant), &buf.holes[j]);
+            for k in 0..width {
+                jac_m[j * w + c0 + k] = l.d[k];
+            }
         }
     }
     true
