@@ -5,6 +5,7 @@
 //! [`Robot`], with the field path in the error.
 
 use crate::error::ModelError;
+use crate::estimate::EstimateSpec;
 use crate::loads::Loads;
 use crate::robot::{Robot, RobotSpec};
 use crate::settings::SolverSettings;
@@ -27,6 +28,9 @@ pub struct Scene {
     /// Solver settings (defaults documented on [`SolverSettings`]).
     #[serde(default)]
     pub numerics: SolverSettings,
+    /// Inverse problem for `estimate` and `track` (optional).
+    #[serde(default)]
+    pub estimate: Option<EstimateSpec>,
 }
 
 /// Why a scene could not be read.
@@ -117,6 +121,9 @@ impl Scene {
     pub fn validate(&self) -> Result<(), ModelError> {
         let robot = Robot::new(self.robot.clone())?;
         self.loads.validate(&robot)?;
+        if let Some(e) = &self.estimate {
+            e.validate(&robot)?;
+        }
         self.numerics.validate()
     }
     /// The validated robot.

@@ -2,8 +2,11 @@
 //! continuum robots. See the README for the commands and file formats.
 
 mod calibrate;
+mod estimate;
 mod output;
 mod solve;
+mod stream;
+mod track;
 mod validate;
 
 use clap::{Parser, Subcommand};
@@ -27,6 +30,10 @@ enum Command {
     Validate(validate::Args),
     /// Fit named scene parameters to observed or predicted table columns.
     Calibrate(calibrate::Args),
+    /// Estimate loads and shape from a file of cable length changes.
+    Estimate(estimate::Args),
+    /// Streaming estimation: encoder rows in (stdin or --input), JSON lines out.
+    Track(track::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -35,6 +42,8 @@ fn main() -> std::process::ExitCode {
         Command::Solve(a) => solve::run(a),
         Command::Validate(a) => validate::run(a),
         Command::Calibrate(a) => calibrate::run(a),
+        Command::Estimate(a) => estimate::run(a),
+        Command::Track(a) => track::run(a),
     };
     match result {
         Ok(code) => code,

@@ -1,0 +1,88 @@
+//! `cablesense estimate SCENE --measure FILE`: a batch of encoder samples.
+
+use crate::stream::{error_json, estimate_json, estimator, parser, process};
+use anyhow::Context;
+use std::io::BufRead;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `estimate`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene with an [estimate] table.
+    #[arg(default_value = "data/scenes/track_demo.toml")]
+    scene: PathBuf,
+    /// Encoder samples: CSV with a header, or JSON lines.
+    #[arg(long, default_value = "data/measurements/track_demo.csv")]
+    measure: PathBuf,
+    /// One JSON object per sample instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Run `estimate`. Exit code 1 if any line was bad or any sample did not converge.
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let (scene, mut est) = estimator(&a.scene)?;
+    let mut p = parser(&scene, &est);
+    let file = std::fs::File::open(&a.measure)
+        .with_context(|| format!("opening {}", a.measure.display()))?;
+    let mut bad = 0usize;
+    if !a.json {
+        let names = est.names().join("  ");
+        println!(
+            "scene: {}   measurements: {}",
+            a.scene.display(),
+            a.measure.display()
+        );
+        println!(
+            "{:>5} {:>8} {:<13} {}  (+- 1 sigma)   tip x y z (mm)",
+            "line", "t (s)", "status", names
+        );
+    }
+    for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
+        let line = line.with_context(|| format!("reading {}", a.measure.display()))?;
+        match p.line(i + 1, &line) {
+            Ok(None) => {}
+            Ok(Some(s)) => {
+                let e = process(&mut est, &s);
+                if !matches!(e.status, cablesense::estimate::EstimateStatus::Converged) {
+                    bad += 1;
+                }
+                if a.json {
+                    println!("{}", estimate_json(&s, &e));
+                } else {
+                    let vals: Vec<String> = e
+                        .values
+                        .iter()
+                        .zip(&e.std_dev)
+                        .map(|(v, s)| format!("{v:.5} +- {s:.1e}"))
+                        .collect();
+                    let t = &e.tip.position;
+                    println!(
+                        "{:>5} {:>8} {:<13} {}   {:.2} {:.2} {:.2}",
+                        s.line,
+                        s.t_s.map_or("-".into(), |t| format!("{t:.3}")),
+                        format!("{:?}", e.status),
+                        vals.join("  "),
+                        t.x * 1e3,
+                        t.y * 1e3,
+                        t.z * 1e3
+                    );
+                }
+            }
+            Err(err) => {
+                bad += 1;
+                if a.json {
+                    println!("{}", error_json(&err));
+                } else {
+                    eprintln!("{err}");
+                }
+            }
+        }
+    }
+    Ok(if bad == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}

@@ -1,0 +1,83 @@
+//! Shared by `estimate` and `track`: estimator from a scene, one JSON object per sample.
+
+use anyhow::Context;
+use cablesense::estimate::{Estimate, Estimator};
+use cablesense::files::measure::{LineError, Sample, StreamParser};
+use cablesense::Scene;
+use serde_json::{json, Value};
+use std::path::Path;
+
+/// Build the estimator of a scene that has an `[estimate]` table.
+pub fn estimator(scene_path: &Path) -> anyhow::Result<(Scene, Estimator)> {
+    let scene = Scene::load(scene_path)?;
+    let spec = scene.estimate.clone().with_context(|| {
+        format!(
+            "{}: no [estimate] table: nothing to estimate",
+            scene_path.display()
+        )
+    })?;
+    let robot = scene.build_robot()?;
+    let est = Estimator::new(robot, scene.loads.clone(), scene.numerics.clone(), spec)
+        .with_context(|| format!("building the estimator of {}", scene_path.display()))?;
+    Ok((scene, est))
+}
+
+/// A parser for the scene's cable names.
+pub fn parser(scene: &Scene, est: &Estimator) -> StreamParser {
+    let names = scene
+        .robot
+        .cables
+        .iter()
+        .enumerate()
+        .map(|(j, c)| c.name.clone().unwrap_or_else(|| format!("cable{j}")))
+        .collect();
+    let _ = est;
+    StreamParser::new(names, None)
+}
+
+/// Tick one sample and snapshot it.
+pub fn process(est: &mut Estimator, s: &Sample) -> Estimate {
+    est.tick(&s.changes_m, s.sigma_m.as_deref());
+    est.estimate()
+}
+
+/// JSON line of an estimate.
+pub fn estimate_json(s: &Sample, e: &Estimate) -> Value {
+    let values: serde_json::Map<String, Value> = e
+        .names
+        .iter()
+        .zip(&e.values)
+        .map(|(n, v)| (n.clone(), json!(v)))
+        .collect();
+    let std: serde_json::Map<String, Value> = e
+        .names
+        .iter()
+        .zip(&e.std_dev)
+        .map(|(n, v)| (n.clone(), json!(v)))
+        .collect();
+    json!({
+        "line": s.line,
+        "t_s": s.t_s,
+        "status": e.status,
+        "estimate": values,
+        "std_dev": std,
+        "covariance": e.covariance,
+        "rank": e.rank,
+        "condition": if e.condition.is_finite() { json!(e.condition) } else { json!(null) },
+        "unobservable": e.unobservable,
+        "tip_position_m": [e.tip.position.x, e.tip.position.y, e.tip.position.z],
+        "tip_tangent": [e.tip.rotation[(0, 2)], e.tip.rotation[(1, 2)], e.tip.rotation[(2, 2)]],
+        "section_tips_m": e.section_tips.iter().map(|p| [p.position.x, p.position.y, p.position.z]).collect::<Vec<_>>(),
+        "measured_m": e.measured_m,
+        "predicted_m": e.predicted_m,
+        "residual_m": e.residual_m,
+        "iterations": e.iterations,
+        "jacobian_evals": e.jacobian_evals,
+        "elapsed_s": e.elapsed_s,
+    })
+}
+
+/// JSON line of a bad input line.
+pub fn error_json(e: &LineError) -> Value {
+    json!({"line": e.line, "error": e.to_string(), "field": e.field})
+}

@@ -1,0 +1,62 @@
+//! `cablesense track [SCENE]`: streaming estimation, one JSON line per input row.
+
+use crate::stream::{error_json, estimate_json, estimator, parser, process};
+use anyhow::Context;
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `track`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene with an [estimate] table. Default: the shipped demo, which also
+    /// defaults the input to its recorded stream.
+    scene: Option<PathBuf>,
+    /// Read rows from this file instead of standard input.
+    #[arg(long)]
+    input: Option<PathBuf>,
+}
+
+/// Run `track`: bad rows produce `{"line": n, "error": ...}` and the stream goes on.
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let (scene_path, input) = match (a.scene, a.input) {
+        (Some(s), i) => (s, i),
+        (None, i) => (
+            PathBuf::from("data/scenes/track_demo.toml"),
+            Some(i.unwrap_or_else(|| PathBuf::from("data/measurements/track_demo.csv"))),
+        ),
+    };
+    let (scene, mut est) = estimator(&scene_path)?;
+    let mut p = parser(&scene, &est);
+    let reader: Box<dyn BufRead> = match &input {
+        Some(f) => Box::new(std::io::BufReader::new(
+            std::fs::File::open(f).with_context(|| format!("opening {}", f.display()))?,
+        )),
+        None => Box::new(std::io::BufReader::new(std::io::stdin())),
+    };
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    for (i, line) in reader.lines().enumerate() {
+        let line = match line {
+            Ok(l) => l,
+            Err(e) => {
+                writeln!(
+                    out,
+                    "{}",
+                    serde_json::json!({"line": i + 1, "error": format!("unreadable line: {e}")})
+                )?;
+                continue;
+            }
+        };
+        match p.line(i + 1, &line) {
+            Ok(None) => {}
+            Ok(Some(s)) => {
+                let e = process(&mut est, &s);
+                writeln!(out, "{}", estimate_json(&s, &e))?;
+            }
+            Err(err) => writeln!(out, "{}", error_json(&err))?,
+        }
+        out.flush()?;
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,278 @@
+//! Encoder streams: cable length changes per sample, as CSV or JSON lines.
+//!
+//! CSV: a header naming the columns: optional `t_s`, then one column per cable,
+//! named like the scene's cables (changes in metres), optionally `sigma_<cable>`
+//! columns (metres). An empty cell means "this cable is missing in this sample".
+//! JSON lines: `{"t_s": 0.1, "changes_m": [1e-4, null, 2e-4], "sigma_m": [...]}`;
+//! `null` is missing. A malformed or non-finite value is an error for that line
+//! only (naming the line and the field); the stream goes on.
+
+use serde::Deserialize;
+use thiserror::Error;
+
+/// One encoder sample.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    /// 1-based line number in the input.
+    pub line: usize,
+    /// Time stamp (s), if the stream has one.
+    pub t_s: Option<f64>,
+    /// Length change per cable (m); `NaN` = missing.
+    pub changes_m: Vec<f64>,
+    /// Noise per cable (m), if given; `NaN` = default.
+    pub sigma_m: Option<Vec<f64>>,
+}
+
+/// A bad line (the stream continues after it).
+#[derive(Clone, Debug, PartialEq, Error)]
+#[error("line {line}: {field}: {why}")]
+pub struct LineError {
+    /// 1-based line number.
+    pub line: usize,
+    /// Column or JSON key.
+    pub field: String,
+    /// What is wrong, quoting the value.
+    pub why: String,
+}
+
+/// Input format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// Comma-separated with a header line.
+    Csv,
+    /// One JSON object per line.
+    JsonLines,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Col {
+    Time,
+    Change(usize),
+    Sigma(usize),
+}
+
+/// Parses a stream line by line.
+#[derive(Clone, Debug)]
+pub struct StreamParser {
+    cables: Vec<String>,
+    format: Option<Format>,
+    columns: Option<Vec<Col>>,
+}
+
+impl StreamParser {
+    /// A parser for a robot with these cable names; `format = None` detects it from
+    /// the first non-empty line (`{` means JSON lines).
+    pub fn new(cables: Vec<String>, format: Option<Format>) -> Self {
+        Self {
+            cables,
+            format,
+            columns: None,
+        }
+    }
+
+    /// Parse one line. `Ok(None)` for blank, comment (`#`) and CSV header lines.
+    pub fn line(&mut self, line_no: usize, text: &str) -> Result<Option<Sample>, LineError> {
+        let t = text.trim();
+        if t.is_empty() || t.starts_with('#') {
+            return Ok(None);
+        }
+        let format = *self.format.get_or_insert(if t.starts_with('{') {
+            Format::JsonLines
+        } else {
+            Format::Csv
+        });
+        match format {
+            Format::JsonLines => self.json(line_no, t).map(Some),
+            Format::Csv => self.csv(line_no, t),
+        }
+    }
+
+    fn err(line: usize, field: impl Into<String>, why: impl Into<String>) -> LineError {
+        LineError {
+            line,
+            field: field.into(),
+            why: why.into(),
+        }
+    }
+
+    fn csv(&mut self, line: usize, t: &str) -> Result<Option<Sample>, LineError> {
+        let cells: Vec<&str> = t.split(',').map(str::trim).collect();
+        let Some(cols) = &self.columns else {
+            let mut cols = Vec::with_capacity(cells.len());
+            for c in &cells {
+                let col = if *c == "t_s" || *c == "t" {
+                    Col::Time
+                } else if let Some(j) = self.cables.iter().position(|n| n == c) {
+                    Col::Change(j)
+                } else if let Some(j) = c
+                    .strip_prefix("sigma_")
+                    .and_then(|n| self.cables.iter().position(|x| x == n))
+                {
+                    Col::Sigma(j)
+                } else {
+                    return Err(Self::err(
+                        line,
+                        format!("header `{c}`"),
+                        format!(
+                            "not t_s, a cable name ({}) or sigma_<cable>",
+                            self.cables.join(", ")
+                        ),
+                    ));
+                };
+                cols.push(col);
+            }
+            if !cols.iter().any(|c| matches!(c, Col::Change(_))) {
+                return Err(Self::err(line, "header", "no cable column"));
+            }
+            self.columns = Some(cols);
+            return Ok(None);
+        };
+        if cells.len() != cols.len() {
+            return Err(Self::err(
+                line,
+                "row",
+                format!("{} cells, header has {}", cells.len(), cols.len()),
+            ));
+        }
+        let n = self.cables.len();
+        let mut s = Sample {
+            line,
+            t_s: None,
+            changes_m: vec![f64::NAN; n],
+            sigma_m: None,
+        };
+        for (cell, col) in cells.iter().zip(cols) {
+            let name = match col {
+                Col::Time => "t_s".to_string(),
+                Col::Change(j) => self.cables[*j].clone(),
+                Col::Sigma(j) => format!("sigma_{}", self.cables[*j]),
+            };
+            if cell.is_empty() {
+                if *col == Col::Time {
+                    return Err(Self::err(line, name, "empty time stamp"));
+                }
+                continue;
+            }
+            let v: f64 = cell
+                .parse()
+                .map_err(|_| Self::err(line, name.clone(), format!("`{cell}` is not a number")))?;
+            if !v.is_finite() {
+                return Err(Self::err(line, name, format!("`{cell}` is not finite")));
+            }
+            match col {
+                Col::Time => s.t_s = Some(v),
+                Col::Change(j) => s.changes_m[*j] = v,
+                Col::Sigma(j) => {
+                    if v <= 0.0 {
+                        return Err(Self::err(line, name, format!("noise must be > 0, got {v}")));
+                    }
+                    s.sigma_m.get_or_insert_with(|| vec![f64::NAN; n])[*j] = v;
+                }
+            }
+        }
+        Ok(Some(s))
+    }
+
+    fn json(&self, line: usize, t: &str) -> Result<Sample, LineError> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Row {
+            #[serde(default)]
+            t_s: Option<f64>,
+            changes_m: Vec<Option<f64>>,
+            #[serde(default)]
+            sigma_m: Option<Vec<Option<f64>>>,
+        }
+        let row: Row =
+            serde_json::from_str(t).map_err(|e| Self::err(line, "json", e.to_string()))?;
+        let n = self.cables.len();
+        if row.changes_m.len() != n {
+            return Err(Self::err(
+                line,
+                "changes_m",
+                format!("{} values for {} cables", row.changes_m.len(), n),
+            ));
+        }
+        if let Some(t) = row.t_s {
+            if !t.is_finite() {
+                return Err(Self::err(line, "t_s", format!("{t} is not finite")));
+            }
+        }
+        let sigma = match row.sigma_m {
+            Some(v) if v.len() != n => {
+                return Err(Self::err(
+                    line,
+                    "sigma_m",
+                    format!("{} values for {} cables", v.len(), n),
+                ));
+            }
+            Some(v) => {
+                let mut out = vec![f64::NAN; n];
+                for (j, s) in v.iter().enumerate() {
+                    if let Some(s) = s {
+                        if !(s.is_finite() && *s > 0.0) {
+                            return Err(Self::err(
+                                line,
+                                format!("sigma_m[{j}]"),
+                                format!("noise must be finite and > 0, got {s}"),
+                            ));
+                        }
+                        out[j] = *s;
+                    }
+                }
+                Some(out)
+            }
+            None => None,
+        };
+        Ok(Sample {
+            line,
+            t_s: row.t_s,
+            changes_m: row
+                .changes_m
+                .iter()
+                .map(|v| v.unwrap_or(f64::NAN))
+                .collect(),
+            sigma_m: sigma,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parser() -> StreamParser {
+        StreamParser::new(vec!["a".into(), "b".into()], None)
+    }
+
+    #[test]
+    fn csv_with_missing_cell_and_bad_lines() {
+        let mut p = parser();
+        assert_eq!(p.line(1, "t_s,a,b").unwrap(), None);
+        let s = p.line(2, "0.1,1e-4,").unwrap().unwrap();
+        assert_eq!(s.changes_m[0], 1e-4);
+        assert!(s.changes_m[1].is_nan());
+        let e = p.line(3, "0.2,abc,1").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (3, "a"));
+        assert!(e.to_string().contains("`abc`"));
+        let e = p.line(4, "0.3,NaN,1").unwrap_err();
+        assert!(e.to_string().contains("not finite"), "{e}");
+        assert!(p.line(5, "0.4,1e-4,2e-4").unwrap().is_some());
+    }
+
+    #[test]
+    fn json_lines() {
+        let mut p = parser();
+        let s = p
+            .line(1, r#"{"t_s": 1.0, "changes_m": [null, 2e-4]}"#)
+            .unwrap()
+            .unwrap();
+        assert!(s.changes_m[0].is_nan());
+        let e = p.line(2, r#"{"changes_m": [1.0]}"#).unwrap_err();
+        assert_eq!(e.field, "changes_m");
+        let e = p
+            .line(3, r#"{"changes_m": [1.0, 2.0], "oops": 1}"#)
+            .unwrap_err();
+        assert!(e.why.contains("oops"), "{e}");
+    }
+}
