@@ -6,6 +6,7 @@ pub mod error;
 pub mod estimate;
 pub mod files;
 pub mod integrate;
+pub mod ladder;
 pub mod loads;
 pub mod math;
 pub mod robot;

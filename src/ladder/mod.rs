@@ -1,0 +1,1 @@
+//! Ladder of forward models behind one interface (constant curvature ... full Cosserat).
