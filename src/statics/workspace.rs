@@ -54,6 +54,9 @@ pub struct Workspace {
     /// d(cable length)/d[x; theta], row-major `c x (n + p)`.
     sens_m: Vec<f64>,
     sens_col: Vec<f64>,
+    /// `dx/dtheta` from the last sensitivity sweep, row-major `n x p` (predictor).
+    dxdtheta: Vec<f64>,
+    dxdtheta_valid: bool,
     /// `lu` holds a factorised Jacobian of this plan (possibly from an earlier point).
     lu_valid: bool,
     tip: Vector3<f64>,
@@ -82,6 +85,8 @@ impl Workspace {
             sens_s: vec![0.0; n * (n + p)],
             sens_m: vec![0.0; c * (n + p)],
             sens_col: vec![0.0; n],
+            dxdtheta: vec![0.0; n * p],
+            dxdtheta_valid: false,
             b64: PassBuf::new(&plan),
             b3: PassBuf::new(&plan),
             b6: PassBuf::new(&plan),
@@ -166,6 +171,24 @@ impl Workspace {
         }
     }
 
+    /// Set `theta` and move the shooting unknowns by the first-order predictor
+    /// `dx = (dx/dtheta) dtheta` from the last [`Workspace::length_sensitivities`]
+    /// (so the following warm solve starts O(dtheta^2) from the equilibrium).
+    /// No allocation.
+    pub fn set_theta_predicted(&mut self, theta: &[f64]) {
+        let (n, p) = (self.plan.n_unknowns, self.plan.params.len());
+        if self.dxdtheta_valid && self.has_solution {
+            for r in 0..n {
+                let mut dx = 0.0;
+                for k in 0..p.min(theta.len()) {
+                    dx += self.dxdtheta[r * p + k] * (theta[k] - self.b64.theta[k]);
+                }
+                self.x[r] += dx;
+            }
+        }
+        self.set_theta(theta);
+    }
+
     /// Current load parameters.
     pub fn theta(&self) -> &[f64] {
         &self.b64.theta
@@ -239,6 +262,9 @@ impl Workspace {
                 self.sens_col[r] = self.sens_s[r * w + n + k];
             }
             self.lu.solve_in_place(&mut self.sens_col);
+            for r in 0..n {
+                self.dxdtheta[r * p + k] = -self.sens_col[r];
+            }
             for j in 0..c {
                 let mut g = self.sens_m[j * w + n + k];
                 for r in 0..n {
@@ -247,6 +273,7 @@ impl Workspace {
                 out[j * p + k] = g;
             }
         }
+        self.dxdtheta_valid = true;
         true
     }
 
