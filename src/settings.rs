@@ -97,31 +97,38 @@ impl SolverSettings {
     pub fn validate(&self) -> Result<(), ModelError> {
         match self.integrator {
             Integrator::Rk4 { steps_per_section } => {
-                if steps_per_section == 0 {
+                if steps_per_section == 0 || steps_per_section > 1_000_000 {
                     return Err(ModelError::OutOfRange {
                         field: "numerics.integrator.rk4.steps_per_section".into(),
-                        value: 0.0,
-                        why: "at least 1".into(),
+                        value: steps_per_section as f64,
+                        why: "between 1 and 1000000".into(),
                     });
                 }
             }
             Integrator::Adaptive { tol, max_steps } => {
                 ModelError::positive("numerics.integrator.adaptive.tol", tol)?;
-                if max_steps == 0 {
+                if max_steps == 0 || max_steps > 10_000_000 {
                     return Err(ModelError::OutOfRange {
                         field: "numerics.integrator.adaptive.max_steps".into(),
-                        value: 0.0,
-                        why: "at least 1".into(),
+                        value: max_steps as f64,
+                        why: "between 1 and 10000000".into(),
                     });
                 }
             }
         }
         ModelError::positive("numerics.tolerance", self.tolerance)?;
-        if self.max_iterations == 0 {
+        if self.max_iterations == 0 || self.max_iterations > 10_000 {
             return Err(ModelError::OutOfRange {
                 field: "numerics.max_iterations".into(),
-                value: 0.0,
-                why: "at least 1".into(),
+                value: self.max_iterations as f64,
+                why: "between 1 and 10000".into(),
+            });
+        }
+        if self.max_continuation_steps > 10_000 {
+            return Err(ModelError::OutOfRange {
+                field: "numerics.max_continuation_steps".into(),
+                value: self.max_continuation_steps as f64,
+                why: "at most 10000".into(),
             });
         }
         Ok(())

@@ -99,8 +99,40 @@ impl Jacobian for Nested<'_> {
     }
 }
 
-/// Run argmin's Gauss-Newton from the current estimate.
+/// Run argmin's Gauss-Newton from the current estimate. On failure the previous
+/// estimate and its shape are kept.
 pub(super) fn run(est: &mut Estimator) -> EstimateStatus {
+    let before = est.theta.clone();
+    let status = run_argmin(est);
+    if matches!(
+        status,
+        EstimateStatus::Stalled | EstimateStatus::ForwardFailed
+    ) {
+        est.theta.copy_from_slice(&before);
+        est.forward(false);
+        est.cost = est.cost_at(false);
+    }
+    status
+}
+
+/// argmin's stopping rule is a change of the residual norm, which forward-solve
+/// round-off can keep above a tight tolerance; at its iteration limit we therefore
+/// check stationarity ourselves: the Gauss-Newton step at its best point is below
+/// the spec's step tolerance.
+fn stationary(est: &mut Estimator) -> bool {
+    est.jac_evals += 1;
+    if !est.ws.length_sensitivities(&mut est.g, &mut est.len) {
+        return false;
+    }
+    est.g_valid = true;
+    est.g_exact = true;
+    est.normal_equations();
+    est.active.iter_mut().for_each(|a| *a = false);
+    est.solve_step(0.0);
+    (0..est.p).all(|k| est.step[k].abs() <= est.spec.tolerance * (1.0 + est.theta[k].abs()))
+}
+
+fn run_argmin(est: &mut Estimator) -> EstimateStatus {
     let theta0 = DVector::from_column_slice(&est.theta);
     let max_iters = est.spec.max_iterations as u64;
     let tol = est.spec.tolerance;
@@ -133,7 +165,7 @@ pub(super) fn run(est: &mut Estimator) -> EstimateStatus {
                         return EstimateStatus::ForwardFailed;
                     }
                     est.cost = est.cost_at(false);
-                    if iters as u64 >= max_iters {
+                    if iters as u64 >= max_iters && !stationary(est) {
                         EstimateStatus::MaxIterations
                     } else {
                         EstimateStatus::Converged

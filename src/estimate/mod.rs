@@ -30,6 +30,11 @@ use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use thiserror::Error;
 
+/// LM damping above which a tiny step is `Stalled`, not `Converged`.
+const LM_MAX_CONVERGED_DAMPING: f64 = 1e2;
+/// Trial steps per iteration before giving up.
+const MAX_TRIALS: usize = 60;
+
 /// How an estimate ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -140,6 +145,12 @@ pub struct Estimator {
     dscale: Vec<f64>,
     cov: Vec<f64>,
     g_valid: bool,
+    /// `g` is an exact sweep at the current `theta` (not reused, not Broyden-updated).
+    g_exact: bool,
+    /// Unknowns held at an active bound in the current step (projected methods).
+    active: Vec<bool>,
+    /// Unknowns with unbounded variance (unobservable, no prior).
+    infinite_var: Vec<bool>,
     mu: f64,
     status: EstimateStatus,
     iterations: usize,
@@ -237,6 +248,9 @@ impl Estimator {
             dscale: vec![0.0; p],
             cov: vec![0.0; p * p],
             g_valid: false,
+            g_exact: false,
+            active: vec![false; p],
+            infinite_var: vec![false; p],
             mu: 1e-3,
             status: EstimateStatus::NoData,
             iterations: 0,
@@ -283,9 +297,17 @@ impl Estimator {
     pub fn status(&self) -> EstimateStatus {
         self.status
     }
-    /// Covariance of the last sample, row-major `p x p`.
+    /// Covariance of the last sample, row-major `p x p`, from the sensitivities the
+    /// sample ended with: exact when [`Estimator::statistics_are_exact`], else from
+    /// reused ones (call [`Estimator::refresh_statistics`]). Unobservable directions
+    /// without a prior carry no information: see the `std_dev` of [`Estimate`].
     pub fn covariance(&self) -> &[f64] {
         &self.cov
+    }
+    /// Whether covariance, rank and condition were computed from an exact sweep at
+    /// the current estimate.
+    pub fn statistics_are_exact(&self) -> bool {
+        self.g_exact
     }
     /// Reference cable lengths the changes are measured from (m).
     pub fn reference_lengths(&self) -> &[f64] {
@@ -311,6 +333,7 @@ impl Estimator {
             self.theta[k] = theta[k].clamp(self.lb[k], self.ub[k]);
         }
         self.g_valid = false;
+        self.g_exact = false;
     }
 
     /// Process one sample: cable length changes (m, `NaN` = missing) and optional
@@ -420,6 +443,10 @@ impl Estimator {
                 if a == b {
                     v += damping * if self.h[a * p + a] > 0.0 { 1.0 } else { 0.0 };
                 }
+                // unknowns held at a bound are decoupled and get no step
+                if self.active[a] || self.active[b] {
+                    v = if a == b { 1.0 } else { 0.0 };
+                }
                 self.scratch[a * p + b] = v;
             }
         }
@@ -433,7 +460,9 @@ impl Estimator {
             }
             let mut proj = 0.0;
             for k in 0..p {
-                proj += self.eig_v[k * p + i] * self.dscale[k] * self.grad[k];
+                if !self.active[k] {
+                    proj += self.eig_v[k * p + i] * self.dscale[k] * self.grad[k];
+                }
             }
             for k in 0..p {
                 self.step[k] -= self.eig_v[k * p + i] * proj / lam * self.dscale[k];
@@ -448,11 +477,12 @@ impl Estimator {
         }
         let mut cost = self.cost_at(false);
         let method = self.spec.method;
-        if method != Method::LevenbergMarquardt {
-            self.mu = 0.0;
-        } else if self.mu == 0.0 {
-            self.mu = 1e-3;
-        }
+        // damping never carries over from an earlier (possibly impossible) sample
+        self.mu = if method == Method::LevenbergMarquardt {
+            1e-3
+        } else {
+            0.0
+        };
         for it in 0..self.spec.max_iterations {
             self.iterations = it + 1;
             if let Some(b) = self.spec.time_budget_s {
@@ -469,10 +499,24 @@ impl Estimator {
                     return EstimateStatus::ForwardFailed;
                 }
                 self.g_valid = true;
+                self.g_exact = true;
             }
             self.normal_equations();
+            // projected Newton (Bertsekas): an unknown at a bound whose gradient
+            // pushes it outwards is held there; the others take the reduced step
+            for k in 0..p {
+                self.active[k] = method != Method::Constrained
+                    && ((self.theta[k] <= self.lb[k] && self.grad[k] > 0.0)
+                        || (self.theta[k] >= self.ub[k] && self.grad[k] < 0.0));
+            }
             let mut scale = 1.0;
+            let mut trials = 0;
             let accepted = loop {
+                trials += 1;
+                if trials > MAX_TRIALS {
+                    self.cost = cost;
+                    return EstimateStatus::Stalled;
+                }
                 if method == Method::Constrained {
                     if !qp::box_step(self) {
                         self.solve_step(0.0);
@@ -489,6 +533,24 @@ impl Estimator {
                     small &= taken.abs() <= self.spec.tolerance * (1.0 + self.theta[k].abs());
                 }
                 if small {
+                    // a step made tiny by heavy damping certifies nothing by itself:
+                    // converged only if the undamped Gauss-Newton model predicts a
+                    // negligible decrease (stationary point), else the cost could not
+                    // be decreased from a non-stationary point: stalled
+                    if method == Method::LevenbergMarquardt && self.mu > LM_MAX_CONVERGED_DAMPING {
+                        self.solve_step(0.0);
+                        let mut pred = 0.0;
+                        for a in 0..p {
+                            pred -= self.grad[a] * self.step[a];
+                            for b in 0..p {
+                                pred -= 0.5 * self.step[a] * self.h[a * p + b] * self.step[b];
+                            }
+                        }
+                        if pred > 1e-9 * (1.0 + cost) {
+                            self.cost = cost;
+                            return EstimateStatus::Stalled;
+                        }
+                    }
                     self.cost = cost;
                     return EstimateStatus::Converged;
                 }
@@ -525,6 +587,7 @@ impl Estimator {
                     } else if self.spec.reuse_jacobian {
                         self.broyden_update();
                     }
+                    self.g_exact = false;
                     std::mem::swap(&mut self.theta, &mut self.theta_trial);
                     cost = new_cost;
                     break true;
@@ -590,6 +653,7 @@ impl Estimator {
         if !self.g_valid {
             self.jac_evals += 1;
             self.g_valid = self.ws.length_sensitivities(&mut self.g, &mut self.len);
+            self.g_exact = self.g_valid;
             if !self.g_valid {
                 return;
             }
@@ -654,9 +718,16 @@ impl Estimator {
         sym_eigen(&mut self.scratch, p, &mut self.eig_w, &mut self.eig_v);
         let wmax = self.eig_w.iter().fold(0.0f64, |a, w| a.max(*w));
         self.cov.iter_mut().for_each(|x| *x = 0.0);
+        self.infinite_var.iter_mut().for_each(|x| *x = false);
         for i in 0..p {
             let lam = self.eig_w[i];
             if lam.is_nan() || lam <= 1e-14 * wmax {
+                // no information along this direction: unbounded variance, not zero
+                for k in 0..p {
+                    if self.eig_v[k * p + i].abs() > 1e-6 {
+                        self.infinite_var[k] = true;
+                    }
+                }
                 continue;
             }
             for a in 0..p {
@@ -667,8 +738,27 @@ impl Estimator {
         }
     }
 
-    /// Snapshot of the last sample (allocates; recomputes the shape for output).
+    /// Make the covariance, rank and condition exact at the current estimate: when
+    /// the last sample ended on reused (Broyden-updated) sensitivities, sweep once
+    /// more at the estimate (one dual pass) and recompute them. The estimate itself
+    /// does not change. [`Estimator::estimate`] calls this.
+    pub fn refresh_statistics(&mut self) {
+        if self.g_exact
+            || matches!(
+                self.status,
+                EstimateStatus::NoData | EstimateStatus::ForwardFailed
+            )
+        {
+            return;
+        }
+        self.g_valid = false;
+        self.finish();
+    }
+
+    /// Snapshot of the last sample (allocates; recomputes the shape for output and
+    /// makes the statistics exact at the estimate, see [`Estimator::refresh_statistics`]).
     pub fn estimate(&mut self) -> Estimate {
+        self.refresh_statistics();
         let p = self.p;
         let sol = self.ws.solution();
         let unobservable = (0..self.n_unobservable)
@@ -692,7 +782,13 @@ impl Estimator {
             names: self.names.clone(),
             values: self.theta.clone(),
             std_dev: (0..p)
-                .map(|k| self.cov[k * p + k].max(0.0).sqrt())
+                .map(|k| {
+                    if self.infinite_var[k] {
+                        f64::INFINITY
+                    } else {
+                        self.cov[k * p + k].max(0.0).sqrt()
+                    }
+                })
                 .collect(),
             covariance: self.cov.clone(),
             rank: self.rank,

@@ -198,6 +198,13 @@ impl EstimateSpec {
             });
         }
         ModelError::positive("estimate.noise_m", self.noise_m)?;
+        if self.max_iterations == 0 || self.max_iterations > 10_000 {
+            return Err(ModelError::OutOfRange {
+                field: "estimate.max_iterations".into(),
+                value: self.max_iterations as f64,
+                why: "between 1 and 10000".into(),
+            });
+        }
         ModelError::positive("estimate.tolerance", self.tolerance)?;
         ModelError::positive("estimate.rank_tolerance", self.rank_tolerance)?;
         if let Some(t) = self.time_budget_s {

@@ -107,7 +107,7 @@ mod tests {
         lu.matrix_mut()
             .copy_from_slice(&[0.0, 2.0, 1.0, 1.0, 1.0, 0.0, 3.0, 0.0, 1.0]);
         assert!(lu.factor().is_some());
-        let mut b = [5.0, 3.0, 6.0]; // x = (1, 2, 1)
+        let mut b = [5.0, 3.0, 4.0]; // A (1, 2, 1)
         lu.solve_in_place(&mut b);
         for (x, e) in b.iter().zip([1.0, 2.0, 1.0]) {
             assert!((x - e).abs() < 1e-14, "{b:?}");

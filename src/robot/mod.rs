@@ -9,7 +9,10 @@
 
 mod spec;
 
-pub use spec::{BaseSpec, CableSpec, GuideSpec, HolesSpec, RobotSpec, SectionSpec};
+pub use spec::{
+    BaseSpec, CableSpec, GuideSpec, HolesSpec, RobotSpec, SectionFile, SectionSpec,
+    MAX_GUIDES_PER_SECTION,
+};
 
 use crate::error::ModelError;
 use crate::math::exp_so3;
@@ -125,7 +128,7 @@ impl Robot {
             let route: Vec<usize> = (0..guides.len())
                 .filter(|&g| guides[g].section <= c.end_section)
                 .collect();
-            let field = format!("cables[{j}]");
+            let field = format!("robot.cables[{j}]");
             let last = *route.last().ok_or_else(|| ModelError::Invalid {
                 field: format!("{field}.end_section"),
                 why: format!(

@@ -42,27 +42,88 @@ impl Default for BaseSpec {
 }
 
 /// One section: a length of uniform rod, optionally carrying evenly spaced guide disks.
+///
+/// In files the material fields sit directly in the section table (see
+/// [`SectionFile`]); serde's `flatten` would silently disable `deny_unknown_fields`,
+/// so the file form is a separate flat struct converted with `from`/`into`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "SectionFile", into = "SectionFile")]
 pub struct SectionSpec {
     /// Unstretched length (m), > 0.
     pub length_m: f64,
     /// Cross-section.
     pub shape: CrossSection,
     /// Material.
-    #[serde(flatten)]
     pub material: Material,
     /// Timoshenko shear coefficient `k` in `D = diag(kGA, kGA, EA)`. Default 1
     /// (the thesis's `D1 = D2 = GA`); 6(1+nu)/(7+6nu) for a solid circle.
-    #[serde(default = "one")]
     pub shear_coefficient: f64,
     /// Precurvature `u*` (1/m) in the local frame. Default zero (straight rod).
-    #[serde(default)]
     pub precurvature_per_m: [f64; 3],
     /// Guide disks on this section (default none).
-    #[serde(default)]
     pub guides: Option<GuideSpec>,
 }
+
+/// The file form of [`SectionSpec`]: every key at one level, unknown keys rejected.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionFile {
+    /// Unstretched length (m).
+    pub length_m: f64,
+    /// Cross-section.
+    pub shape: CrossSection,
+    /// Young's modulus (Pa).
+    pub youngs_modulus_pa: f64,
+    /// Poisson's ratio (-).
+    pub poisson_ratio: f64,
+    /// Density (kg/m^3).
+    pub density_kg_m3: f64,
+    /// Shear coefficient (default 1).
+    #[serde(default = "one")]
+    pub shear_coefficient: f64,
+    /// Precurvature (1/m, default zero).
+    #[serde(default)]
+    pub precurvature_per_m: [f64; 3],
+    /// Guide disks (default none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub guides: Option<GuideSpec>,
+}
+
+impl From<SectionFile> for SectionSpec {
+    fn from(f: SectionFile) -> Self {
+        Self {
+            length_m: f.length_m,
+            shape: f.shape,
+            material: Material {
+                youngs_modulus_pa: f.youngs_modulus_pa,
+                poisson_ratio: f.poisson_ratio,
+                density_kg_m3: f.density_kg_m3,
+            },
+            shear_coefficient: f.shear_coefficient,
+            precurvature_per_m: f.precurvature_per_m,
+            guides: f.guides,
+        }
+    }
+}
+
+impl From<SectionSpec> for SectionFile {
+    fn from(s: SectionSpec) -> Self {
+        Self {
+            length_m: s.length_m,
+            shape: s.shape,
+            youngs_modulus_pa: s.material.youngs_modulus_pa,
+            poisson_ratio: s.material.poisson_ratio,
+            density_kg_m3: s.material.density_kg_m3,
+            shear_coefficient: s.shear_coefficient,
+            precurvature_per_m: s.precurvature_per_m,
+            guides: s.guides,
+        }
+    }
+}
+
+/// Upper bound on disks per section: the layout is allocated per disk, so an absurd
+/// count in a scene file must fail validation rather than exhaust memory.
+pub const MAX_GUIDES_PER_SECTION: usize = 10_000;
 
 fn one() -> f64 {
     1.0
@@ -119,24 +180,24 @@ pub struct CableSpec {
 impl RobotSpec {
     /// Check every field; errors name the field path and the value.
     pub fn validate(&self) -> Result<(), ModelError> {
-        ModelError::finite3("base.position_m", &self.base.position_m)?;
-        ModelError::finite3("base.axis", &self.base.axis)?;
-        ModelError::finite("base.angle_deg", self.base.angle_deg)?;
+        ModelError::finite3("robot.base.position_m", &self.base.position_m)?;
+        ModelError::finite3("robot.base.axis", &self.base.axis)?;
+        ModelError::finite("robot.base.angle_deg", self.base.angle_deg)?;
         let a = self.base.axis;
         if a[0] * a[0] + a[1] * a[1] + a[2] * a[2] == 0.0 {
             return Err(ModelError::Invalid {
-                field: "base.axis".into(),
+                field: "robot.base.axis".into(),
                 why: "must be non-zero".into(),
             });
         }
         if self.sections.is_empty() {
             return Err(ModelError::Invalid {
-                field: "sections".into(),
+                field: "robot.sections".into(),
                 why: "at least one section is needed".into(),
             });
         }
         for (k, s) in self.sections.iter().enumerate() {
-            let f = format!("sections[{k}]");
+            let f = format!("robot.sections[{k}]");
             ModelError::positive(format!("{f}.length_m"), s.length_m)?;
             s.shape.validate(&format!("{f}.shape"))?;
             s.material.validate(&f)?;
@@ -149,7 +210,7 @@ impl RobotSpec {
         for (j, c) in self.cables.iter().enumerate() {
             if c.end_section >= self.sections.len() {
                 return Err(ModelError::BadIndex {
-                    field: format!("cables[{j}].end_section"),
+                    field: format!("robot.cables[{j}].end_section"),
                     index: c.end_section,
                     count: self.sections.len(),
                 });
@@ -161,7 +222,14 @@ impl RobotSpec {
 
 impl GuideSpec {
     fn validate(&self, section: usize, length: f64) -> Result<(), ModelError> {
-        let f = format!("sections[{section}].guides");
+        let f = format!("robot.sections[{section}].guides");
+        if self.count > MAX_GUIDES_PER_SECTION {
+            return Err(ModelError::OutOfRange {
+                field: format!("{f}.count"),
+                value: self.count as f64,
+                why: format!("at most {MAX_GUIDES_PER_SECTION} disks per section"),
+            });
+        }
         if self.count == 0 {
             return Err(ModelError::OutOfRange {
                 field: format!("{f}.count"),

@@ -319,7 +319,7 @@ fn apply_event<T: Real>(
             }
             for &(j, k) in &plan.guide_cables[g] {
                 let c = &plan.cables[j];
-                let arm = y.rot * v3::<T>(&c.hole_local);
+                let arm = y.rot * v3::<T>(&c.hole_local[k]);
                 let p = y.r + arm;
                 buf.holes[j][k] = p;
                 if let Some(u) = c.unknowns {

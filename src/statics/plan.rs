@@ -72,8 +72,8 @@ pub(crate) struct PlanCable {
     pub tensioned: bool,
     /// Base-plate hole in world coordinates.
     pub base_hole: Vector3<f64>,
-    /// Local hole vector on the route's disks.
-    pub hole_local: Vector3<f64>,
+    /// Local hole vector on each route disk (each disk's own hole pattern).
+    pub hole_local: Vec<Vector3<f64>>,
     /// Number of disks on the route.
     pub len: usize,
     /// Arc length of the termination disk (m).
@@ -263,7 +263,11 @@ impl Plan {
                 tension: loads.tension(j),
                 tensioned: is_tensioned(j),
                 base_hole: robot.base_position() + robot.base_rotation() * c.base_hole,
-                hole_local: robot.guides()[c.route[0]].holes[c.hole],
+                hole_local: c
+                    .route
+                    .iter()
+                    .map(|&g| robot.guides()[g].holes[c.hole])
+                    .collect(),
                 len: c.route.len(),
                 end_s: robot.guides()[c.route[c.route.len() - 1]].s,
                 unknowns,
@@ -392,7 +396,7 @@ impl Plan {
         }
         for c in &self.cables {
             if c.tension > 0.0 {
-                let p = at(c.end_s) + self.base_rot * c.hole_local;
+                let p = at(c.end_s) + self.base_rot * c.hole_local[c.len - 1];
                 add(p, -axis * (c.tension * load_scale), Vector3::zeros());
             }
         }

@@ -42,6 +42,9 @@ pub struct Workspace {
     plan: Plan,
     x: Vec<f64>,
     x_trial: Vec<f64>,
+    /// Lowest-residual iterate at full load during the current solve.
+    x_best: Vec<f64>,
+    best_res: f64,
     dx: Vec<f64>,
     res: Vec<f64>,
     lu: DenseLu,
@@ -92,6 +95,8 @@ impl Workspace {
             b6: PassBuf::new(&plan),
             x: vec![0.0; n],
             x_trial: vec![0.0; n],
+            x_best: vec![0.0; n],
+            best_res: f64::INFINITY,
             dx: vec![0.0; n],
             res: vec![0.0; n],
             lu: DenseLu::new(n),
@@ -179,10 +184,13 @@ impl Workspace {
         let (n, p) = (self.plan.n_unknowns, self.plan.params.len());
         if self.dxdtheta_valid && self.has_solution {
             for r in 0..n {
-                let mut dx = 0.0;
-                for k in 0..p.min(theta.len()) {
-                    dx += self.dxdtheta[r * p + k] * (theta[k] - self.b64.theta[k]);
-                }
+                let row = &self.dxdtheta[r * p..(r + 1) * p];
+                let dx: f64 = row
+                    .iter()
+                    .zip(theta)
+                    .zip(&self.b64.theta)
+                    .map(|((d, t), t0)| d * (t - t0))
+                    .sum();
                 self.x[r] += dx;
             }
         }
@@ -289,6 +297,7 @@ impl Workspace {
         self.jac_evals = 0;
         let mut iterations = 0;
         let mut continuation_steps = 0;
+        self.best_res = f64::INFINITY;
         let warm = start == Start::Warm && self.has_solution;
         if !warm {
             self.cold_guess(1.0);
@@ -308,6 +317,11 @@ impl Workspace {
             status = st;
             iterations += it;
             continuation_steps = steps;
+        }
+        if !status.is_converged() && self.best_res < max_abs(&self.res) {
+            // hand back the best full-load iterate, not a partial-load point
+            self.x.copy_from_slice(&self.x_best);
+            self.eval_at(false, 1.0);
         }
         self.has_solution = status.is_converged();
         self.report = SolveReport {
@@ -347,7 +361,7 @@ impl Workspace {
                 let route = &self.robot.cables()[j].route;
                 for (k, &g) in route.iter().enumerate().skip(1) {
                     let s = self.robot.guides()[g].s;
-                    let q = p.base_r + axis * s + p.base_rot * c.hole_local;
+                    let q = p.base_r + axis * s + p.base_rot * c.hole_local[k];
                     for a in 0..3 {
                         self.x[u + 3 * (k - 1) + a] = q[a] / p.length;
                     }
@@ -419,6 +433,10 @@ impl Workspace {
         let mut jacobians = 0;
         let mut chord_steps = 0;
         loop {
+            if lam == 1.0 && max_abs(&self.res) < self.best_res {
+                self.best_res = max_abs(&self.res);
+                self.x_best.copy_from_slice(&self.x);
+            }
             if max_abs(&self.res) <= self.settings.tolerance {
                 return (SolveStatus::Converged, it);
             }
