@@ -1,8 +1,14 @@
-//! Shared test helpers: robot builders and one tolerance helper.
+//! Shared test helpers: robot builders, solver settings, independent section
+//! properties and one tolerance helper.
 #![allow(dead_code)]
 
+use cablesense::nalgebra::{Matrix3, Vector3};
 use cablesense::robot::{CableSpec, GuideSpec, HolesSpec, SectionSpec};
-use cablesense::{CrossSection, Material, Robot, RobotSpec};
+use cablesense::{
+    CrossSection, Integrator, Loads, Material, PointLoad, Robot, RobotSpec, Solution,
+    SolverSettings,
+};
+use std::f64::consts::PI;
 
 /// `|got - want| <= abs + rel * |want|`; the message names what, index and `s`.
 #[derive(Clone, Copy, Debug)]
@@ -18,6 +24,13 @@ impl Tol {
     pub fn rel(rel: f64) -> Self {
         Self { abs: 0.0, rel }
     }
+    pub fn both(abs: f64, rel: f64) -> Self {
+        Self { abs, rel }
+    }
+    /// True when `got` is within tolerance of `want` (for proptest's `prop_assert!`).
+    pub fn ok(&self, got: f64, want: f64) -> bool {
+        got.is_finite() && (got - want).abs() <= self.abs + self.rel * want.abs()
+    }
     #[track_caller]
     pub fn check(&self, what: &str, index: usize, s: f64, got: f64, want: f64) {
         let bound = self.abs + self.rel * want.abs();
@@ -28,21 +41,51 @@ impl Tol {
         );
     }
     #[track_caller]
-    pub fn check3(&self, what: &str, s: f64, got: &nalgebra::Vector3<f64>, want: &nalgebra::Vector3<f64>) {
+    pub fn check3(&self, what: &str, s: f64, got: &Vector3<f64>, want: &Vector3<f64>) {
         for i in 0..3 {
             self.check(what, i, s, got[i], want[i]);
         }
     }
+    #[track_caller]
+    pub fn check33(&self, what: &str, s: f64, got: &Matrix3<f64>, want: &Matrix3<f64>) {
+        for i in 0..9 {
+            self.check(what, i, s, got[i], want[i]);
+        }
+    }
+    /// A failure message like `check`'s, or `None` when within tolerance (proptest).
+    pub fn err3(
+        &self,
+        what: &str,
+        s: f64,
+        got: &Vector3<f64>,
+        want: &Vector3<f64>,
+    ) -> Option<String> {
+        (0..3).find(|&i| !self.ok(got[i], want[i])).map(|i| {
+            format!(
+                "{what}[{i}] at s = {s}: got {:e}, want {:e}, |diff| = {:e} > {:e}",
+                got[i],
+                want[i],
+                (got[i] - want[i]).abs(),
+                self.abs + self.rel * want[i].abs()
+            )
+        })
+    }
 }
 
 pub fn nitinol() -> Material {
-    Material { youngs_modulus_pa: 62.7e9, poisson_ratio: 0.3, density_kg_m3: 6800.0 }
+    Material {
+        youngs_modulus_pa: 62.7e9,
+        poisson_ratio: 0.3,
+        density_kg_m3: 6800.0,
+    }
 }
 
 pub fn section(length: f64, diameter: f64) -> SectionSpec {
     SectionSpec {
         length_m: length,
-        shape: CrossSection::Solid { diameter_m: diameter },
+        shape: CrossSection::Solid {
+            diameter_m: diameter,
+        },
         material: nitinol(),
         shear_coefficient: 1.0,
         precurvature_per_m: [0.0; 3],
@@ -58,13 +101,26 @@ pub fn guides(count: usize, first: f64, spacing: f64) -> GuideSpec {
         thickness_m: 3e-3,
         diameter_m: 0.03,
         mass_kg: 2.2e-3,
-        holes: HolesSpec { radius_m: 0.01, angles_deg: vec![90.0, 210.0, 330.0] },
+        holes: HolesSpec {
+            radius_m: 0.01,
+            angles_deg: vec![90.0, 210.0, 330.0],
+        },
     }
+}
+
+/// A robot from sections, no cables, base at the origin along world +z.
+pub fn robot_of(sections: Vec<SectionSpec>) -> Robot {
+    Robot::new(RobotSpec {
+        base: Default::default(),
+        sections,
+        cables: vec![],
+    })
+    .unwrap()
 }
 
 /// One plain rod along world +z.
 pub fn plain_rod(length: f64, diameter: f64) -> Robot {
-    Robot::new(RobotSpec { base: Default::default(), sections: vec![section(length, diameter)], cables: vec![] }).unwrap()
+    robot_of(vec![section(length, diameter)])
 }
 
 /// Single section, five guides, three cables ending on the last disk.
@@ -74,18 +130,151 @@ pub fn five_guide_robot() -> Robot {
     Robot::new(RobotSpec {
         base: Default::default(),
         sections: vec![s],
-        cables: (0..3).map(|h| CableSpec { name: None, hole: h, end_section: 0 }).collect(),
+        cables: (0..3)
+            .map(|h| CableSpec {
+                name: None,
+                hole: h,
+                end_section: 0,
+            })
+            .collect(),
     })
     .unwrap()
 }
 
-/// Two sections with four guides each; cables 0-2 end on section 0, 3-5 on section 1.
+/// Two sections with four guides each (at 0.04, 0.09, 0.14, 0.19 m of each 0.2 m
+/// section: with 3 mm disks a guide centred on the section end would stick out of it);
+/// cables 0-2 end on section 0, 3-5 on section 1.
 pub fn two_section_robot() -> Robot {
     let mut a = section(0.2, 1.56e-3);
-    a.guides = Some(guides(4, 0.05, 0.05));
+    a.guides = Some(guides(4, 0.04, 0.05));
     let mut b = section(0.2, 1.2e-3);
-    b.guides = Some(guides(4, 0.05, 0.05));
-    let mut cables: Vec<CableSpec> = (0..3).map(|h| CableSpec { name: None, hole: h, end_section: 0 }).collect();
-    cables.extend((0..3).map(|h| CableSpec { name: None, hole: h, end_section: 1 }));
-    Robot::new(RobotSpec { base: Default::default(), sections: vec![a, b], cables }).unwrap()
+    b.guides = Some(guides(4, 0.04, 0.05));
+    let mut cables: Vec<CableSpec> = (0..3)
+        .map(|h| CableSpec {
+            name: None,
+            hole: h,
+            end_section: 0,
+        })
+        .collect();
+    cables.extend((0..3).map(|h| CableSpec {
+        name: None,
+        hole: h,
+        end_section: 1,
+    }));
+    Robot::new(RobotSpec {
+        base: Default::default(),
+        sections: vec![a, b],
+        cables,
+    })
+    .unwrap()
+}
+
+// ---------------------------------------------------------------------------
+// Section properties computed here from the material and diameter, independently
+// of `cablesense::rod` (thesis eqs. 2.9 and 2.12: D = diag(kGA, kGA, EA),
+// C = diag(EI, EI, GJ); G = E / (2 (1 + nu)) for an isotropic solid).
+
+/// Properties of a solid circular section of diameter `d` made of `nitinol()`.
+#[derive(Clone, Copy, Debug)]
+pub struct Props {
+    pub ei: f64,
+    pub gj: f64,
+    pub ea: f64,
+    pub ga: f64,
+    /// rho A (kg/m)
+    pub lambda: f64,
+}
+
+pub fn props(d: f64) -> Props {
+    let m = nitinol();
+    let e = m.youngs_modulus_pa;
+    let g = e / (2.0 * (1.0 + m.poisson_ratio));
+    let a = PI * d * d / 4.0;
+    let i = PI * d.powi(4) / 64.0;
+    Props {
+        ei: e * i,
+        gj: g * 2.0 * i,
+        ea: e * a,
+        ga: g * a,
+        lambda: m.density_kg_m3 * a,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Settings and loads.
+
+/// Default settings with fixed-step RK4.
+pub fn rk4(steps_per_section: usize) -> SolverSettings {
+    SolverSettings {
+        integrator: Integrator::Rk4 { steps_per_section },
+        ..Default::default()
+    }
+}
+
+/// Default settings with the adaptive DP5(4) integrator.
+pub fn adaptive(tol: f64) -> SolverSettings {
+    SolverSettings {
+        integrator: Integrator::Adaptive {
+            tol,
+            max_steps: 100_000,
+        },
+        ..Default::default()
+    }
+}
+
+/// A world-frame force and torque at the end of `section`.
+pub fn point(section: usize, force: [f64; 3], torque: [f64; 3]) -> PointLoad {
+    PointLoad {
+        section,
+        force_n: force,
+        torque_nm: torque,
+        ..Default::default()
+    }
+}
+
+/// No gravity, one world-frame load at the tip of a one-section rod.
+pub fn tip_only(force: [f64; 3], torque: [f64; 3]) -> Loads {
+    Loads {
+        point: vec![point(0, force, torque)],
+        ..Loads::none()
+    }
+}
+
+/// Solve from a cold start and insist on convergence.
+#[track_caller]
+pub fn solve_ok(robot: &Robot, loads: &Loads, settings: &SolverSettings) -> Solution {
+    let sol = cablesense::solve(robot, loads, settings).expect("valid input");
+    assert!(
+        sol.report.status.is_converged(),
+        "solve did not converge: {:?}",
+        sol.report
+    );
+    sol
+}
+
+/// Rotation by `angle` (rad) about `axis` (any length), Rodrigues' formula written here.
+pub fn axis_angle(axis: [f64; 3], angle: f64) -> Matrix3<f64> {
+    let k = Vector3::from(axis).normalize();
+    let kx = Matrix3::new(0.0, -k.z, k.y, k.z, 0.0, -k.x, -k.y, k.x, 0.0);
+    Matrix3::identity() + kx * angle.sin() + kx * kx * (1.0 - angle.cos())
+}
+
+/// Rotation taking the base's local +z (the backbone) to world +x: a horizontal
+/// clamp, so that gravity `[0, 0, -9.81]` acts across the rod.
+pub fn horizontal() -> Matrix3<f64> {
+    axis_angle([0.0, 1.0, 0.0], PI / 2.0)
+}
+
+/// `two_section_robot()` but with a different hole pattern on section 1's disks
+/// (radius 8 mm at 60/180/300 degrees instead of 10 mm at 90/210/330): cables 3-5 use
+/// hole `j - 3` of each disk they pass, so they jog from one pattern to the other
+/// between the last disk of section 0 and the first of section 1.
+pub fn two_section_robot_mixed_holes() -> Robot {
+    let mut spec = two_section_robot().spec().clone();
+    let g = spec.sections[1].guides.as_mut().unwrap();
+    g.holes = HolesSpec {
+        radius_m: 0.008,
+        angles_deg: vec![60.0, 180.0, 300.0],
+    };
+    Robot::new(spec).unwrap()
 }
