@@ -1,2 +1,118 @@
-//! Validation layer: the thesis experiments (tables 4.1-4.5) as scenes, and
-//! least-squares calibration of named scene parameters.
+//! Validation layer: the thesis experiments (tables 4.1-4.5) as scenes, the
+//! comparison of our predictions with the thesis's observed and predicted columns,
+//! and least-squares calibration of named scene parameters.
+//!
+//! Workflow:
+//! 1. [`ThesisTable`] names a table; [`TableData::load`] reads its CSV and scene
+//!    from `data/thesis/` (the scenes bundle geometry, loads template and numerics).
+//! 2. [`FittedFile`] holds fitted parameter values (`data/thesis/fitted.toml`),
+//!    applied on top of a scene with [`FitRecord::apply`].
+//! 3. [`compare`] solves every row and lines up observed, thesis-predicted and our
+//!    tip positions and cable lengths, with the thesis's error metric.
+//! 4. [`FitProblem`] + [`fit`] adjust named parameters ([`ParamPath`], e.g.
+//!    `robot/sections/*/youngs_modulus_pa`) to the observed or predicted columns.
+//!
+//! Units: SI everywhere in this module (the CSVs' cm and g are converted by
+//! [`crate::files::thesis::Table::col_si`]). Printing in cm is the binary's job.
+
+mod compare;
+mod fit;
+mod fitted;
+mod param;
+mod tables;
+
+pub use compare::{
+    compare, simulate, Comparison, LengthRow, LengthSummary, PointRow, PointSummary, RowComparison,
+};
+pub use fit::{fit, FitMethod, FitProblem, FitReport, FitSettings, FitStatus, Target};
+pub use fitted::{FitRecord, FitRun, FittedFile, ParamValue, SceneFits};
+pub use param::{set_params, ParamPath};
+pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
+
+use crate::error::ModelError;
+use crate::files::thesis::TableError;
+use crate::files::SceneError;
+use thiserror::Error;
+
+/// Why a validation or calibration step could not run.
+///
+/// Non-convergence of a forward solve during a comparison is reported in the
+/// [`Comparison`] (status per row), not as an error; during a fit it is an error
+/// only at the starting point (a later trial point that fails is rejected).
+#[derive(Debug, Error)]
+pub enum ValidationError {
+    /// A table file could not be read or lacks a column.
+    #[error(transparent)]
+    Table(#[from] TableError),
+    /// A scene file could not be read.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The scene (after setting parameters or row loads) is invalid.
+    #[error("{context}: {source}")]
+    Model {
+        /// What was being built.
+        context: String,
+        /// The invalid field.
+        source: ModelError,
+    },
+    /// Unknown table name.
+    #[error("unknown table `{0}` (known: 4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc)")]
+    UnknownTable(String),
+    /// A parameter path is malformed.
+    #[error("parameter path `{path}`: {why}")]
+    BadPath {
+        /// The path as given.
+        path: String,
+        /// What is wrong.
+        why: String,
+    },
+    /// A parameter path does not lead to a number in the scene.
+    #[error("parameter path `{path}` does not name a number in the scene: {why}")]
+    NoSuchParam {
+        /// The path as given.
+        path: String,
+        /// Where the walk stopped.
+        why: String,
+    },
+    /// The scene no longer deserializes after writing a value (e.g. a float into
+    /// an integer field).
+    #[error("setting `{path}` = {value} breaks the scene: {why}")]
+    SetFailed {
+        /// The path.
+        path: String,
+        /// The value written.
+        value: f64,
+        /// Deserializer message.
+        why: String,
+    },
+    /// The scene lacks a point load a row needs to set.
+    #[error("table {table}: the scene needs loads.point[{point}] ({why})")]
+    MissingPointLoad {
+        /// Table.
+        table: String,
+        /// Index into `loads.point`.
+        point: usize,
+        /// Purpose of that load.
+        why: String,
+    },
+    /// A forward solve did not converge where a result is required.
+    #[error(
+        "table {table}, row {row}: forward solve ended with {status:?} (residual {residual:.2e})"
+    )]
+    NotConverged {
+        /// Table.
+        table: String,
+        /// Row index (0-based).
+        row: usize,
+        /// Solver status.
+        status: crate::SolveStatus,
+        /// Scaled residual.
+        residual: f64,
+    },
+    /// The requested fit is not meaningful (no parameters, no residuals, a copied column...).
+    #[error("fit: {0}")]
+    BadFit(String),
+    /// The fitted-values file is malformed.
+    #[error("fitted values: {0}")]
+    Fitted(String),
+}

@@ -1,10 +1,284 @@
-//! `cablesense validate`: the thesis tables (being written).
+//! `cablesense validate`: the thesis tables shipped in `data/thesis`, observed vs
+//! thesis-predicted vs our predictions, with the thesis's error metric, and an SVG
+//! figure per table.
+
+#[path = "plot.rs"]
+mod plot;
+
+use anyhow::Context;
+use cablesense::validation::{
+    compare, Comparison, FitRecord, FittedFile, TableData, Target, ThesisTable,
+};
+use cablesense::Scene;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
 /// Arguments of `validate`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Directory with the thesis tables, scenes and fitted.toml.
+    /// Default: `data/thesis` here, else the one in the crate's source tree.
+    #[arg(long)]
+    data: Option<PathBuf>,
+    /// Directory for the SVG figures.
+    #[arg(long, default_value = "out/validate")]
+    out: PathBuf,
+    /// Only these tables (4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc); repeatable. Default: all.
+    #[arg(long = "table")]
+    tables: Vec<String>,
+    /// Fitted values file. Default: DATA/fitted.toml.
+    #[arg(long)]
+    fitted: Option<PathBuf>,
+    /// Ignore fitted values: use the scene files as they are.
+    #[arg(long)]
+    no_fitted: bool,
+    /// Do not write figures.
+    #[arg(long)]
+    no_plots: bool,
+}
 
-/// Run `validate`.
-pub fn run(_a: Args) -> anyhow::Result<std::process::ExitCode> {
-    anyhow::bail!("validate is being implemented")
+/// `--data` or the default data directory.
+pub fn data_dir(arg: Option<PathBuf>) -> PathBuf {
+    arg.unwrap_or_else(|| {
+        let here = PathBuf::from("data/thesis");
+        if here.is_dir() {
+            here
+        } else {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("data/thesis")
+        }
+    })
+}
+
+/// Parse `--table` values (all tables when empty).
+pub fn parse_tables(names: &[String]) -> anyhow::Result<Vec<ThesisTable>> {
+    if names.is_empty() {
+        return Ok(ThesisTable::ALL.to_vec());
+    }
+    names
+        .iter()
+        .map(|n| Ok(n.parse::<ThesisTable>()?))
+        .collect()
+}
+
+/// Run `validate`. Exit code 0 when every row converged, 1 otherwise.
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let dir = data_dir(a.data);
+    let fitted_path = a.fitted.unwrap_or_else(|| dir.join("fitted.toml"));
+    let fitted = if a.no_fitted {
+        FittedFile::default()
+    } else {
+        FittedFile::load(&fitted_path)?
+    };
+    if !a.no_plots {
+        std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    }
+    println!("thesis tables: {}", dir.display());
+    if !a.no_fitted {
+        println!("fitted values: {}", fitted_path.display());
+    }
+    println!("coordinates: x along the clamped rod, y up, cm; errors as in the thesis: |p - q| / L_ref x 100 %");
+    let mut all_ok = true;
+    for t in parse_tables(&a.tables)? {
+        let data = TableData::load(&dir, t)?;
+        let rec = fitted.get(data.spec.scene, Target::Predicted);
+        let scene = match rec {
+            Some(r) => r.apply(&data.scene)?,
+            None => data.scene.clone(),
+        };
+        let c = compare(&data, &scene)?;
+        all_ok &= c.all_converged();
+        print_header(&data, rec, &scene);
+        print_comparison(&c);
+        if let Some(obs) = fitted.get(data.spec.scene, Target::Observed) {
+            let c_obs = compare(&data, &obs.apply(&data.scene)?)?;
+            print_observed_fit(&c_obs, obs);
+        }
+        if !a.no_plots {
+            let file = a
+                .out
+                .join(format!("table_{}.svg", t.name().replace('.', "_")));
+            let title = format!("Table {}: {}", t.name(), data.spec.title);
+            if data.spec.points.is_empty() {
+                plot::length_changes(&c, &title, &file)?;
+            } else {
+                plot::backbones(&c, &title, &file)?;
+            }
+            println!("  figure: {}", file.display());
+        }
+    }
+    Ok(if all_ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+fn params_line(rec: &FitRecord) -> String {
+    rec.params
+        .iter()
+        .map(|p| format!("{} = {}", p.path, human(&p.path, p.value)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A value in the unit its path suggests.
+fn human(path: &str, v: f64) -> String {
+    if path.ends_with("_pa") {
+        format!("{:.4} GPa", v * 1e-9)
+    } else if path.ends_with("_m") {
+        format!("{:.4} mm", v * 1e3)
+    } else {
+        format!("{v:.6}")
+    }
+}
+
+fn print_header(data: &TableData, rec: Option<&FitRecord>, scene: &Scene) {
+    let spec = data.spec;
+    println!("\n== Table {}: {} ==", data.table, spec.title);
+    println!(
+        "  scene {} ({:?} guide mass)",
+        data.scene_path.display(),
+        scene.numerics.guide_mass
+    );
+    match rec {
+        Some(r) if !r.params.is_empty() => println!(
+            "  fitted to the thesis's predicted columns: {}",
+            params_line(r)
+        ),
+        _ => println!("  no fitted values: scene file as stored"),
+    }
+    if spec.predicted_is_copy {
+        println!("  NOTE: the printed predicted columns are a copy of table 4.3 (README \"Table 4.4 caveat\"): shown, never a target");
+    }
+    if !spec.points.is_empty() {
+        println!("  L_ref = {:.1} cm", spec.ref_length_m * 100.0);
+    }
+}
+
+/// Row load values in grams, as printed in the tables.
+fn loads_text(loads: &[f64]) -> String {
+    loads
+        .iter()
+        .map(|v| format!("{:>7.2}", v * 1e3))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn print_comparison(c: &Comparison) {
+    let spec = c.table.spec();
+    let cols: Vec<&str> = spec.loads.iter().map(|l| l.column()).collect();
+    let load_head = cols.join(" ");
+    let cm = |v: f64| v * 100.0;
+    if !spec.points.is_empty() {
+        println!(
+            "  {:<w$} {:>4} | {:>15} | {:>15} | {:>17} | {:>12} {:>9} | {:>11}",
+            load_head,
+            "pt",
+            "observed x y",
+            "thesis x y",
+            "ours x y",
+            "err% thesis",
+            "err% ours",
+            "ours-thesis",
+            w = load_head.len().max(8)
+        );
+        for row in &c.rows {
+            for (p, spec_p) in row.points.iter().zip(spec.points) {
+                println!(
+                    "  {:<w$} {:>4} | {:>7.2} {:>7.2} | {:>7.2} {:>7.2} | {:>8.3} {:>8.3} | {:>12.3} {:>9.3} | {:>8.3} mm{}",
+                    loads_text(&row.loads),
+                    spec_p.label,
+                    cm(p.observed[0]),
+                    cm(p.observed[1]),
+                    cm(p.thesis[0]),
+                    cm(p.thesis[1]),
+                    cm(p.ours[0]),
+                    cm(p.ours[1]),
+                    p.thesis_err_pct_printed,
+                    p.err_ours_obs_m * 100.0 / c.ref_length_m,
+                    p.err_ours_thesis_m * 1e3,
+                    if row.status.is_converged() { String::new() } else { format!("  [{:?}]", row.status) },
+                    w = load_head.len().max(8)
+                );
+            }
+        }
+        for s in &c.points {
+            println!(
+                "  {:>4}: mean err vs observed: ours {:.3} %, thesis printed {:.3} % (its column mean {:.3} %, recomputed {:.3} %); \
+                 ours vs thesis: max {:.3} mm, rms {:.3} mm",
+                s.label,
+                s.mean_pct_ours_obs,
+                s.thesis_avg_pct,
+                s.mean_pct_printed,
+                s.mean_pct_thesis_obs,
+                s.max_ours_thesis_m * 1e3,
+                s.rms_ours_thesis_m * 1e3
+            );
+        }
+    }
+    if !spec.lengths.is_empty() {
+        println!(
+            "  {:>10} | {:>9} | {:>17} | {:>17} | {:>15} | {:>11}",
+            "tip mass g",
+            "obs delta",
+            "thesis len delta",
+            "ours len delta",
+            "del dif th ours",
+            "ours-thesis"
+        );
+        for row in &c.rows {
+            for l in &row.lengths {
+                println!(
+                    "  {:>10.1} | {:>9.3} | {:>8.2} {:>8.4} | {:>8.4} {:>8.4} | {:>7.4} {:>7.4} | {:>8.3} mm{}",
+                    row.loads[0] * 1e3,
+                    cm(l.observed_delta),
+                    cm(l.thesis_length),
+                    cm(l.thesis_delta),
+                    cm(l.ours_length),
+                    cm(l.ours_delta),
+                    cm(l.observed_delta - l.thesis_delta),
+                    cm(l.observed_delta - l.ours_delta),
+                    (l.ours_length - l.thesis_length) * 1e3,
+                    if row.status.is_converged() { String::new() } else { format!("  [{:?}]", row.status) },
+                );
+            }
+        }
+        for s in &c.lengths {
+            println!(
+                "  {}: refLenPre thesis {:.2} cm, ours {:.4} cm; mean del dif (loaded rows) ours {:.4} cm, thesis printed {:.4} cm \
+                 (recomputed {:.4} cm); |length ours - thesis| max {:.3} mm",
+                s.label,
+                cm(s.thesis_ref_length_m),
+                cm(s.ours_ref_length_m),
+                cm(s.mean_del_dif_ours_m),
+                cm(s.thesis_avg_del_dif_m),
+                cm(s.mean_del_dif_thesis_m),
+                s.max_ours_thesis_m * 1e3
+            );
+        }
+    }
+}
+
+fn print_observed_fit(c: &Comparison, rec: &FitRecord) {
+    println!(
+        "  with the fit to the OBSERVED columns ({}):",
+        params_line(rec)
+    );
+    for s in &c.points {
+        println!(
+            "  {:>4}: mean err vs observed: ours {:.3} %, thesis printed {:.3} %; max |ours - observed| {:.2} mm",
+            s.label,
+            s.mean_pct_ours_obs,
+            s.thesis_avg_pct,
+            s.max_ours_obs_m * 1e3
+        );
+    }
+    for s in &c.lengths {
+        println!(
+            "  {}: mean del dif ours {:.4} cm, thesis printed {:.4} cm",
+            s.label,
+            s.mean_del_dif_ours_m * 100.0,
+            s.thesis_avg_del_dif_m * 100.0
+        );
+    }
 }
