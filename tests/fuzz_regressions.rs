@@ -1,0 +1,68 @@
+//! Replays every committed fuzz input through the fuzz targets' own checks
+//! (`fuzz/fuzz_targets/shared.rs`): the seed corpora in `fuzz/seeds/<target>/` and
+//! the minimized crashers in `fuzz/regressions/<target>/` (rust-lang/regex style).
+//! A failure names the file; reproduce it with
+//! `cargo fuzz run --sanitizer none <target> fuzz/regressions/<target>/<file>`.
+
+#[path = "../fuzz/fuzz_targets/shared.rs"]
+mod shared;
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+
+/// Files of `fuzz/{seeds,regressions}/<target>/`, sorted (README files skipped).
+fn inputs(target: &str) -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz");
+    let mut files = Vec::new();
+    for kind in ["seeds", "regressions"] {
+        let Ok(dir) = std::fs::read_dir(root.join(kind).join(target)) else {
+            continue;
+        };
+        for entry in dir {
+            let path = entry.expect("readable directory entry").path();
+            let is_doc = path
+                .file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("README"));
+            if path.is_file() && !is_doc {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// Run `check` on every input of `target`; report all failing files at once.
+fn replay(target: &str, check: fn(&[u8]), min_seeds: usize) {
+    let files = inputs(target);
+    assert!(
+        files.len() >= min_seeds,
+        "{target}: expected at least {min_seeds} committed inputs, found {}",
+        files.len()
+    );
+    let failed: Vec<String> = files
+        .iter()
+        .filter_map(|path| {
+            let data = std::fs::read(path).expect("readable fuzz input");
+            catch_unwind(AssertUnwindSafe(|| check(&data)))
+                .err()
+                .map(|_| path.display().to_string())
+        })
+        .collect();
+    assert!(failed.is_empty(), "{target}: failing inputs: {failed:#?}");
+}
+
+#[test]
+fn scene_toml_inputs() {
+    replay("scene_toml", shared::scene_toml, 2);
+}
+
+#[test]
+fn scene_json_inputs() {
+    replay("scene_json", shared::scene_json, 2);
+}
+
+#[test]
+fn forward_solve_inputs() {
+    replay("forward_solve", shared::forward_solve, 2);
+}
