@@ -18,6 +18,7 @@
 mod compare;
 mod fit;
 mod fitted;
+mod inverse;
 mod param;
 mod tables;
 
@@ -26,6 +27,7 @@ pub use compare::{
 };
 pub use fit::{fit, FitMethod, FitProblem, FitReport, FitSettings, FitStatus, Target};
 pub use fitted::{FitRecord, FitRun, FittedFile, ParamValue, SceneFits};
+pub use inverse::{table_4_5_inverse, InverseRow, READING_SIGMA_M};
 pub use param::{set_params, ParamPath};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
 
