@@ -1,1 +1,334 @@
-//! Ladder of forward models behind one interface (constant curvature ... full Cosserat).
+//! Ladder of forward models behind one interface, from a closed-form constant-curvature
+//! arc per section up to the full Cosserat rod, and an automatic choice of the cheapest
+//! rung that meets an accuracy target.
+//!
+//! | rung | model | cost | exact when |
+//! |---|---|---|---|
+//! | [`ConstantCurvature`] | one arc per section, curvature = section moment / EI | closed form (a fixed point only with point forces) | pure bending torques, no gravity |
+//! | [`PiecewiseConstantCurvature`] | one arc per piece between disks/loads, fixed point on the shape | O(pieces) per iteration | never; error O(h^2) in the piece length |
+//! | [`RodRung`] Kirchhoff | inextensible, unshearable rod by shooting | Newton on the ODE | no shear and no extension (PL/(GA), T/(EA) -> 0) |
+//! | [`RodRung`] Cosserat | full rod (thesis eqs. 2.3-2.13) by shooting | Newton on the ODE | reference |
+//!
+//! Every rung answers the same question through [`ForwardModel`]: loads in, tip and
+//! section-end poses, guide poses and cable lengths out (cable lengths always from the
+//! guide transforms of thesis 3.8.1, [`crate::cables::path_length`]). Rod rungs expose
+//! their [`SolverSettings`] ([`Rung::solver_settings`]) so that the estimator
+//! ([`crate::estimate::Estimator`]) can run on them; the two curvature rungs are
+//! forward-only.
+
+mod anderson;
+mod arc;
+mod auto;
+mod cc;
+mod pcc;
+mod rod;
+
+pub use arc::{arc_pose, ArcJacobian};
+pub use auto::{
+    choose, parse_length, AutoChoice, AutoSettings, CandidateReport, LengthParseError, Verdict,
+};
+pub use cc::{CcSettings, ConstantCurvature};
+pub use pcc::{PccSettings, PiecewiseConstantCurvature};
+pub use rod::RodRung;
+
+use crate::error::ModelError;
+use crate::loads::Loads;
+use crate::robot::Robot;
+use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
+use crate::statics::{Pose, SolveStatus, Start};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Why a rung could not be built or run. Non-convergence is not an error: see
+/// [`LadderReport::status`].
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum LadderError {
+    /// Invalid robot, loads or settings.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// A setting of a curvature rung is out of range.
+    #[error("{field} = {value} is out of range: {why}")]
+    Setting {
+        /// Field path, e.g. `pcc.pieces_per_section`.
+        field: String,
+        /// Rejected value.
+        value: f64,
+        /// What is allowed.
+        why: String,
+    },
+    /// The automatic choice was given no candidate rung or no probe load.
+    #[error("no candidate rung: {0}")]
+    NoCandidate(String),
+}
+
+/// Counts and outcome of one ladder solve.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LadderReport {
+    /// How the solve ended (the rod rungs' [`SolveStatus`]; the curvature rungs use
+    /// `Converged`, `MaxIterations` and `NonFinite` with the same meaning).
+    pub status: SolveStatus,
+    /// Iterations: Newton iterations (rod), fixed-point sweeps (curvature rungs).
+    pub iterations: usize,
+    /// Final residual: scaled boundary residual (rod), largest curvature change of
+    /// the last sweep times the rod length (curvature rungs), dimensionless.
+    pub residual: f64,
+}
+
+/// Everything a rung computes, allocating (see [`ForwardModel::output`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LadderOutput {
+    /// Outcome of the solve that produced this output.
+    pub report: LadderReport,
+    /// Pose of each section's end, base to tip (the last is the tip).
+    pub section_tips: Vec<Pose>,
+    /// Pose of each guide disk centre, base to tip.
+    pub guides: Vec<Pose>,
+    /// Cable lengths from the base plate (m), indexed like `robot.cables`.
+    pub cable_lengths: Vec<f64>,
+}
+
+impl LadderOutput {
+    /// Tip pose.
+    pub fn tip(&self) -> Option<&Pose> {
+        self.section_tips.last()
+    }
+}
+
+/// One rung of the ladder: a forward model of a fixed robot.
+///
+/// `solve` is the hot call (it updates the tip and the cable lengths; the rod rungs do
+/// not allocate after the first call with a given load structure); `output` is the
+/// allocating snapshot with every pose.
+pub trait ForwardModel {
+    /// Solve for `loads`. [`Start::Warm`] starts from the previous solution when the
+    /// rung iterates (rod and piecewise rungs), [`Start::Cold`] from the straight rod.
+    fn solve(&mut self, loads: &Loads, start: Start) -> Result<LadderReport, LadderError>;
+    /// Tip position of the last solve (m, world).
+    fn tip_position(&self) -> Vector3<f64>;
+    /// Cable lengths of the last solve (m) into `out` (indexed like `robot.cables`).
+    fn cable_lengths_into(&self, out: &mut [f64]);
+    /// Poses and lengths of the last solve (allocates).
+    fn output(&mut self) -> LadderOutput;
+    /// The robot.
+    fn robot(&self) -> &Robot;
+}
+
+/// A rung and its settings: a plain, serializable description.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rung {
+    /// Constant curvature per section.
+    ConstantCurvature(CcSettings),
+    /// Piecewise constant curvature between disks and load points.
+    PiecewiseConstantCurvature(PccSettings),
+    /// Rod by shooting (Kirchhoff or Cosserat per `rod_model`).
+    Rod(SolverSettings),
+}
+
+impl Rung {
+    /// The reference of the ladder: full Cosserat, accurate guide mass (thesis 3.8),
+    /// adaptive Dormand-Prince at tol 1e-12, Newton to a scaled residual of 1e-11.
+    pub fn reference() -> Self {
+        Self::Rod(SolverSettings {
+            rod_model: RodModel::Cosserat,
+            guide_mass: GuideMass::Accurate,
+            integrator: Integrator::Adaptive {
+                tol: 1e-12,
+                max_steps: 1_000_000,
+            },
+            tolerance: 1e-11,
+            ..SolverSettings::default()
+        })
+    }
+
+    /// Short label, e.g. `cc`, `pcc/point/8`, `kirchhoff/average/rk4-16`,
+    /// `cosserat/accurate/adaptive-1e-8`.
+    pub fn label(&self) -> String {
+        match self {
+            Self::ConstantCurvature(_) => "cc".into(),
+            Self::PiecewiseConstantCurvature(p) => {
+                format!(
+                    "pcc/{}/{}",
+                    guide_mass_name(p.guide_mass),
+                    p.pieces_per_section
+                )
+            }
+            Self::Rod(s) => {
+                let model = match s.rod_model {
+                    RodModel::Cosserat => "cosserat",
+                    RodModel::Kirchhoff => "kirchhoff",
+                };
+                let int = match s.integrator {
+                    Integrator::Rk4 { steps_per_section } => format!("rk4-{steps_per_section}"),
+                    Integrator::Adaptive { tol, .. } => format!("adaptive-{tol:.0e}"),
+                };
+                format!("{model}/{}/{int}", guide_mass_name(s.guide_mass))
+            }
+        }
+    }
+
+    /// Family name: `cc`, `pcc`, `kirchhoff` or `cosserat`.
+    pub fn family(&self) -> &'static str {
+        match self {
+            Self::ConstantCurvature(_) => "cc",
+            Self::PiecewiseConstantCurvature(_) => "pcc",
+            Self::Rod(s) if s.rod_model == RodModel::Kirchhoff => "kirchhoff",
+            Self::Rod(_) => "cosserat",
+        }
+    }
+
+    /// Settings an estimator can run on (rod rungs only).
+    pub fn solver_settings(&self) -> Option<&SolverSettings> {
+        match self {
+            Self::Rod(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// Build the model for `robot`.
+    pub fn build(&self, robot: &Robot) -> Result<Box<dyn ForwardModel>, LadderError> {
+        Ok(match self {
+            Self::ConstantCurvature(s) => Box::new(ConstantCurvature::new(robot.clone(), *s)?),
+            Self::PiecewiseConstantCurvature(s) => {
+                Box::new(PiecewiseConstantCurvature::new(robot.clone(), *s)?)
+            }
+            Self::Rod(s) => Box::new(RodRung::new(robot.clone(), s.clone())?),
+        })
+    }
+}
+
+/// Scene-file spelling of a guide-mass model.
+pub fn guide_mass_name(g: GuideMass) -> &'static str {
+    match g {
+        GuideMass::None => "none",
+        GuideMass::Average => "average",
+        GuideMass::Accurate => "accurate",
+        GuideMass::Point => "point",
+    }
+}
+
+/// Guide-mass models worth distinguishing on `robot`: `none` alone for a robot
+/// without disks (they would all give the same answer), else average, accurate, point.
+pub fn guide_mass_choices(robot: &Robot) -> Vec<GuideMass> {
+    if robot.guides().iter().all(|g| g.mass == 0.0) {
+        vec![GuideMass::None]
+    } else {
+        vec![GuideMass::Average, GuideMass::Accurate, GuideMass::Point]
+    }
+}
+
+/// The full ladder used by `cablesense pareto`: CC; PCC at 4..32 pieces per section;
+/// Kirchhoff and Cosserat with every relevant guide-mass model, RK4 at 4..64 steps
+/// per section and the adaptive pair at tol 1e-4..1e-10.
+pub fn full_ladder(robot: &Robot) -> Vec<Rung> {
+    let mut out = vec![Rung::ConstantCurvature(CcSettings::default())];
+    let masses = guide_mass_choices(robot);
+    for &g in &masses {
+        for pieces in [4, 8, 16, 32] {
+            out.push(Rung::PiecewiseConstantCurvature(PccSettings {
+                pieces_per_section: pieces,
+                guide_mass: g,
+                ..PccSettings::default()
+            }));
+        }
+    }
+    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
+        for &g in &masses {
+            let mut ints: Vec<Integrator> = [4, 8, 16, 32, 64]
+                .into_iter()
+                .map(|n| Integrator::Rk4 {
+                    steps_per_section: n,
+                })
+                .collect();
+            ints.extend([1e-4, 1e-6, 1e-8, 1e-10].map(|tol| Integrator::Adaptive {
+                tol,
+                max_steps: 100_000,
+            }));
+            for integrator in ints {
+                out.push(Rung::Rod(SolverSettings {
+                    rod_model: model,
+                    guide_mass: g,
+                    integrator,
+                    ..SolverSettings::default()
+                }));
+            }
+        }
+    }
+    out
+}
+
+/// A smaller ladder for `--model auto` (each candidate is solved on every probe load):
+/// CC; PCC 4/16; Kirchhoff and Cosserat with each guide-mass model at RK4 4, 8, 16,
+/// 32, 64 steps per section and adaptive 1e-8.
+pub fn auto_ladder(robot: &Robot) -> Vec<Rung> {
+    let mut out = vec![Rung::ConstantCurvature(CcSettings::default())];
+    let masses = guide_mass_choices(robot);
+    for &g in &masses {
+        for pieces in [4, 16] {
+            out.push(Rung::PiecewiseConstantCurvature(PccSettings {
+                pieces_per_section: pieces,
+                guide_mass: g,
+                ..PccSettings::default()
+            }));
+        }
+    }
+    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
+        for &g in &masses {
+            let mut ints: Vec<Integrator> = [4, 8, 16, 32, 64]
+                .into_iter()
+                .map(|n| Integrator::Rk4 {
+                    steps_per_section: n,
+                })
+                .collect();
+            ints.push(Integrator::Adaptive {
+                tol: 1e-8,
+                max_steps: 100_000,
+            });
+            for integrator in ints {
+                out.push(Rung::Rod(SolverSettings {
+                    rod_model: model,
+                    guide_mass: g,
+                    integrator,
+                    ..SolverSettings::default()
+                }));
+            }
+        }
+    }
+    out
+}
+
+/// Validate `loads` against `robot` cheaply on the hot path: the allocating
+/// [`Loads::validate`] (with its field paths) runs only when a quick check fails.
+pub(crate) fn check_loads(robot: &Robot, loads: &Loads) -> Result<(), LadderError> {
+    let ok = loads.gravity_m_s2.iter().all(|g| g.is_finite())
+        && loads.tensions_n.len() <= robot.cables().len()
+        && loads.tensions_n.iter().all(|t| t.is_finite() && *t >= 0.0)
+        && loads.point.iter().all(|p| {
+            p.section < robot.sections().len()
+                && p.force_n.iter().chain(&p.torque_nm).all(|x| x.is_finite())
+                && p.mass_kg.is_finite()
+                && p.mass_kg >= 0.0
+        });
+    if ok {
+        Ok(())
+    } else {
+        loads.validate(robot)?;
+        Ok(())
+    }
+}
+
+/// `loads` with point loads (forces, torques, payload masses) and cable tensions
+/// multiplied by `factor`; gravity is left alone (it does not vary in service).
+pub fn scale_loads(loads: &Loads, factor: f64) -> Loads {
+    let mut out = loads.clone();
+    for p in &mut out.point {
+        p.force_n = p.force_n.map(|x| x * factor);
+        p.torque_nm = p.torque_nm.map(|x| x * factor);
+        p.mass_kg *= factor;
+    }
+    for t in &mut out.tensions_n {
+        *t *= factor;
+    }
+    out
+}

@@ -4,7 +4,9 @@
 mod calibrate;
 mod estimate;
 mod output;
+mod pareto;
 mod solve;
+mod stability;
 mod stream;
 mod track;
 mod validate;
@@ -34,6 +36,10 @@ enum Command {
     Estimate(estimate::Args),
     /// Streaming estimation: encoder rows in (stdin or --input), JSON lines out.
     Track(track::Args),
+    /// Chart speed against accuracy of every rung of the model ladder (CSV + SVG).
+    Pareto(pareto::Args),
+    /// Map where each shooting setting and estimation method stops converging.
+    Stability(stability::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -44,6 +50,8 @@ fn main() -> std::process::ExitCode {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Estimate(a) => estimate::run(a),
         Command::Track(a) => track::run(a),
+        Command::Pareto(a) => pareto::run(a),
+        Command::Stability(a) => stability::run(a),
     };
     match result {
         Ok(code) => code,

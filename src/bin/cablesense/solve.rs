@@ -1,8 +1,11 @@
-//! `cablesense solve SCENE`: forward statics.
+//! `cablesense solve SCENE`: forward statics, with the scene's own settings or a rung
+//! of the model ladder (`--model`, including `auto`: the cheapest rung within
+//! `--tol` / `--tol-cable`).
 
 use crate::output::{mm, tangent, write_samples_csv};
 use anyhow::Context;
-use cablesense::{Scene, Start, Workspace};
+use cablesense::ladder::{self, AutoChoice, AutoSettings, Rung};
+use cablesense::{Scene, SolverSettings, Start, Workspace};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -18,13 +21,178 @@ pub struct Args {
     /// Write the backbone samples as CSV to this file.
     #[arg(long)]
     samples: Option<PathBuf>,
+    /// Forward model: `scene` (the scene's [numerics], the default), `auto` (the
+    /// cheapest rung of the ladder within --tol and --tol-cable), or a rung label such
+    /// as `cc`, `pcc/point/16`, `kirchhoff/average/rk4-16`, `cosserat/accurate/adaptive-1e-8`.
+    #[arg(long, default_value = "scene")]
+    model: String,
+    /// Tip position target for `--model auto` (a length with unit: m, cm, mm, um, nm).
+    #[arg(long, default_value = "0.1mm", value_parser = parse_len)]
+    tol: f64,
+    /// Cable length target for `--model auto` (a length with unit).
+    #[arg(long = "tol-cable", default_value = "1um", value_parser = parse_len)]
+    tol_cable: f64,
+}
+
+fn parse_len(s: &str) -> Result<f64, String> {
+    ladder::parse_length(s).map_err(|e| e.to_string())
 }
 
 /// Run `solve`. Exit code 0 when converged, 1 when the solver did not converge.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let scene = Scene::load(&a.scene)?;
     let robot = scene.build_robot()?;
-    let mut ws = Workspace::new(robot, scene.loads.clone(), scene.numerics.clone())?;
+    let (rung, choice) = match a.model.as_str() {
+        "scene" => (Rung::Rod(scene.numerics.clone()), None),
+        "auto" => {
+            let settings = AutoSettings {
+                tip_tolerance_m: a.tol,
+                cable_tolerance_m: a.tol_cable,
+                ..AutoSettings::default()
+            };
+            let choice = ladder::choose(
+                &robot,
+                &scene.loads,
+                &settings,
+                &ladder::auto_ladder(&robot),
+            )?;
+            (choice.rung.clone(), Some(choice))
+        }
+        label => {
+            let all = ladder::full_ladder(&robot);
+            let found = all.iter().find(|r| r.label() == label).cloned();
+            let rung = found.with_context(|| {
+                format!(
+                    "unknown --model `{label}`; use scene, auto or one of: {}",
+                    all.iter().map(Rung::label).collect::<Vec<_>>().join(", ")
+                )
+            })?;
+            (rung, None)
+        }
+    };
+    if let (Some(c), false) = (&choice, a.json) {
+        print_choice(c, a.tol, a.tol_cable);
+    }
+    match rung {
+        Rung::Rod(settings) => solve_rod(&a, &scene, settings, choice.as_ref()),
+        other => solve_curvature(&a, &scene, &other, choice.as_ref()),
+    }
+}
+
+/// What `--model auto` picked and why the cheaper rungs were rejected.
+fn print_choice(c: &AutoChoice, tol: f64, tol_cable: f64) {
+    println!(
+        "model auto: targets tip {:.4} mm, cable {:.4} um; probe load factors {:?}; errors against {} (its own error ~{:.1e} m tip, {:.1e} m cable)",
+        tol * 1e3,
+        tol_cable * 1e6,
+        c.probe_factors,
+        c.reference,
+        c.reference_tip_error_m,
+        c.reference_cable_error_m
+    );
+    println!(
+        "  {:<34} {:>12} {:>12} {:>10}  verdict",
+        "rung", "tip err mm", "cable err um", "time us"
+    );
+    let picked_time = c.picked_report().map_or(f64::INFINITY, |p| p.time_s);
+    for r in &c.candidates {
+        // show every rung that is cheaper than the pick (why it was rejected) and the pick
+        if r.time_s <= picked_time || matches!(r.verdict, ladder::Verdict::Picked) {
+            println!(
+                "  {:<34} {:>12.5} {:>12.4} {:>10.1}  {}",
+                r.label,
+                r.tip_error_m * 1e3,
+                r.cable_error_m * 1e6,
+                r.time_s * 1e6,
+                r.verdict
+            );
+        }
+    }
+    match c.picked_report() {
+        Some(p) => println!(
+            "picked {}: estimated error {:.4} mm tip, {:.4} um cable, {:.1} us per solve\n",
+            p.label,
+            p.tip_error_m * 1e3,
+            p.cable_error_m * 1e6,
+            p.time_s * 1e6
+        ),
+        None => println!(
+            "no rung met the targets: using the reference {}\n",
+            c.reference
+        ),
+    }
+}
+
+fn solve_curvature(
+    a: &Args,
+    scene: &Scene,
+    rung: &Rung,
+    choice: Option<&AutoChoice>,
+) -> anyhow::Result<ExitCode> {
+    let robot = scene.build_robot()?;
+    let mut model = rung.build(&robot)?;
+    let started = std::time::Instant::now();
+    let report = model.solve(&scene.loads, Start::Cold)?;
+    let elapsed = started.elapsed();
+    let out = model.output();
+    if a.samples.is_some() {
+        eprintln!(
+            "note: --samples needs a rod rung; {} has no backbone samples",
+            rung.label()
+        );
+    }
+    if a.json {
+        let json = serde_json::json!({
+            "scene": a.scene.display().to_string(),
+            "units": {"length": "m", "time": "s"},
+            "model": rung.label(),
+            "auto": choice,
+            "solve_time_s": elapsed.as_secs_f64(),
+            "output": out,
+        });
+        println!("{}", serde_json::to_string_pretty(&json)?);
+    } else {
+        println!("scene: {}  model: {}", a.scene.display(), rung.label());
+        println!(
+            "status: {:?}  iterations: {}  residual: {:.2e}  time: {:.1} us",
+            report.status,
+            report.iterations,
+            report.residual,
+            elapsed.as_secs_f64() * 1e6
+        );
+        println!("\nsection tips (mm; tangent = local z axis):");
+        for (k, p) in out.section_tips.iter().enumerate() {
+            println!("  {k:>8} {}   {}", mm(&p.position), tangent(p));
+        }
+        if !out.guides.is_empty() {
+            println!("\nguide disks (mm):");
+            for (g, p) in out.guides.iter().enumerate() {
+                println!("  {g:>8} {}   {}", mm(&p.position), tangent(p));
+            }
+        }
+        if !out.cable_lengths.is_empty() {
+            println!("\ncable lengths from the base plate (mm):");
+            for (c, l) in robot.cables().iter().zip(&out.cable_lengths) {
+                println!("  {:<10} {:12.4}", c.name, l * 1e3);
+            }
+        }
+    }
+    Ok(if report.status.is_converged() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+fn solve_rod(
+    a: &Args,
+    scene: &Scene,
+    settings: SolverSettings,
+    choice: Option<&AutoChoice>,
+) -> anyhow::Result<ExitCode> {
+    let robot = scene.build_robot()?;
+    let label = (a.model != "scene").then(|| Rung::Rod(settings.clone()).label());
+    let mut ws = Workspace::new(robot, scene.loads.clone(), settings)?;
     let started = std::time::Instant::now();
     let report = ws.solve(Start::Cold);
     let elapsed = started.elapsed();
@@ -33,15 +201,22 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         write_samples_csv(p, &sol.samples).with_context(|| format!("writing {}", p.display()))?;
     }
     if a.json {
-        let out = serde_json::json!({
+        let mut out = serde_json::json!({
             "scene": a.scene.display().to_string(),
             "units": {"length": "m", "force": "N", "moment": "N m", "time": "s"},
             "solve_time_s": elapsed.as_secs_f64(),
             "solution": sol,
         });
+        if let Some(label) = &label {
+            out["model"] = serde_json::json!(label);
+            out["auto"] = serde_json::json!(choice);
+        }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
-        println!("scene: {}", a.scene.display());
+        match &label {
+            Some(l) => println!("scene: {}  model: {l}", a.scene.display()),
+            None => println!("scene: {}", a.scene.display()),
+        }
         if !scene.description.is_empty() {
             println!("  {}", scene.description);
         }
