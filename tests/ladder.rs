@@ -22,8 +22,8 @@ fn scene(path: &str) -> Scene {
 }
 
 /// Two sections of different diameters, rotated base, disks and passive cables.
-/// Both sections use the same hole radius: the shooting model carries the first
-/// disk's hole along the whole route (src/statics/plan.rs `hole_local`).
+/// Both sections use the same hole radius (each disk's own hole is used by every
+/// rung; a common radius keeps this scene simple).
 fn two_section_scene(extra_loads: &str) -> Scene {
     let text = format!(
         r#"
