@@ -145,10 +145,15 @@ pub fn five_guide_robot() -> Robot {
 /// section: with 3 mm disks a guide centred on the section end would stick out of it);
 /// cables 0-2 end on section 0, 3-5 on section 1.
 pub fn two_section_robot() -> Robot {
+    two_section_robot_first_at(0.04)
+}
+
+/// [`two_section_robot`] with the first disk of each section at `first` (m).
+pub fn two_section_robot_first_at(first: f64) -> Robot {
     let mut a = section(0.2, 1.56e-3);
-    a.guides = Some(guides(4, 0.04, 0.05));
+    a.guides = Some(guides(4, first, 0.05));
     let mut b = section(0.2, 1.2e-3);
-    b.guides = Some(guides(4, 0.04, 0.05));
+    b.guides = Some(guides(4, first, 0.05));
     let mut cables: Vec<CableSpec> = (0..3)
         .map(|h| CableSpec {
             name: None,

@@ -9,9 +9,8 @@
 #![allow(dead_code)]
 
 use cablesense::estimate::{Axis, EstimateSpec, Estimator, Method, UnknownKind, UnknownSpec};
-use cablesense::nalgebra::{Matrix3, Vector3};
-use cablesense::robot::{CableSpec, GuideSpec, HolesSpec, SectionSpec};
-use cablesense::{CrossSection, Loads, Material, PointLoad, Robot, RobotSpec, SolverSettings};
+use cablesense::nalgebra::Vector3;
+use cablesense::{Loads, PointLoad, Robot, SolverSettings};
 use std::f64::consts::PI;
 
 /// Every inverse method of the design card.
@@ -72,63 +71,11 @@ impl Tol {
 }
 
 // ---------------------------------------------------------------------------
-// Robots (copied from tests/common/mod.rs).
+// Robots: the builders of tests/common/mod.rs, shared rather than copied.
 
-pub fn nitinol() -> Material {
-    Material {
-        youngs_modulus_pa: 62.7e9,
-        poisson_ratio: 0.3,
-        density_kg_m3: 6800.0,
-    }
-}
-
-pub fn section(length: f64, diameter: f64) -> SectionSpec {
-    SectionSpec {
-        length_m: length,
-        shape: CrossSection::Solid {
-            diameter_m: diameter,
-        },
-        material: nitinol(),
-        shear_coefficient: 1.0,
-        precurvature_per_m: [0.0; 3],
-        guides: None,
-    }
-}
-
-/// Guide disks with three holes at 90/210/330 degrees, radius 1 cm.
-pub fn guides(count: usize, first: f64, spacing: f64) -> GuideSpec {
-    GuideSpec {
-        count,
-        first_offset_m: first,
-        spacing_m: spacing,
-        thickness_m: 3e-3,
-        diameter_m: 0.03,
-        mass_kg: 2.2e-3,
-        holes: HolesSpec {
-            radius_m: 0.01,
-            angles_deg: vec![90.0, 210.0, 330.0],
-        },
-    }
-}
-
-/// Single section (0.39 m, 1.56 mm Nitinol), five guides, three cables ending on
-/// the last disk; base at the origin along world +z (vertical).
-pub fn five_guide_robot() -> Robot {
-    let mut s = section(0.39, 1.56e-3);
-    s.guides = Some(guides(5, 0.0054, 0.095));
-    Robot::new(RobotSpec {
-        base: Default::default(),
-        sections: vec![s],
-        cables: (0..3)
-            .map(|h| CableSpec {
-                name: None,
-                hole: h,
-                end_section: 0,
-            })
-            .collect(),
-    })
-    .unwrap()
-}
+#[path = "../common/mod.rs"]
+mod common;
+pub use common::{five_guide_robot, horizontal, two_section_robot_first_at};
 
 /// [`five_guide_robot`] clamped horizontally: backbone along world +x, so gravity
 /// `[0, 0, -9.81]` acts across the rod.
@@ -139,44 +86,8 @@ pub fn horizontal_five_guide_robot() -> Robot {
 /// Two sections (0.2 m each, 1.56 mm then 1.2 mm) with four guides each at
 /// 0.045, 0.095, 0.145, 0.195 m from the section start; cables 0-2 end on section
 /// 0, 3-5 on section 1. Base along world +z.
-///
-/// (`tests/common::two_section_robot` puts the last disk at the section end, which
-/// `Robot::new` rejects as `GuideOutsideSection`: the 3 mm disk pokes out.)
 pub fn two_section_robot() -> Robot {
-    let mut a = section(0.2, 1.56e-3);
-    a.guides = Some(guides(4, 0.045, 0.05));
-    let mut b = section(0.2, 1.2e-3);
-    b.guides = Some(guides(4, 0.045, 0.05));
-    let mut cables: Vec<CableSpec> = (0..3)
-        .map(|h| CableSpec {
-            name: None,
-            hole: h,
-            end_section: 0,
-        })
-        .collect();
-    cables.extend((0..3).map(|h| CableSpec {
-        name: None,
-        hole: h,
-        end_section: 1,
-    }));
-    Robot::new(RobotSpec {
-        base: Default::default(),
-        sections: vec![a, b],
-        cables,
-    })
-    .unwrap()
-}
-
-/// Rotation by `angle` (rad) about `axis`, Rodrigues' formula.
-pub fn axis_angle(axis: [f64; 3], angle: f64) -> Matrix3<f64> {
-    let k = Vector3::from(axis).normalize();
-    let kx = Matrix3::new(0.0, -k.z, k.y, k.z, 0.0, -k.x, -k.y, k.x, 0.0);
-    Matrix3::identity() + kx * angle.sin() + kx * kx * (1.0 - angle.cos())
-}
-
-/// Base rotation taking local +z (the backbone) to world +x.
-pub fn horizontal() -> Matrix3<f64> {
-    axis_angle([0.0, 1.0, 0.0], PI / 2.0)
+    two_section_robot_first_at(0.045)
 }
 
 // ---------------------------------------------------------------------------
