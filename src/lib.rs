@@ -23,5 +23,5 @@ pub use files::{Scene, SceneError};
 pub use loads::{Frame, Loads, PointLoad};
 pub use robot::{Robot, RobotSpec};
 pub use rod::{CrossSection, Material};
-pub use settings::{GuideMass, Integrator, RodModel, SolverSettings};
+pub use settings::{CableCoupling, GuideMass, Integrator, RodModel, SolverSettings};
 pub use statics::{solve, Pose, Sample, Solution, SolveReport, SolveStatus, Start, Workspace};

@@ -14,6 +14,26 @@ pub enum RodModel {
     Kirchhoff,
 }
 
+/// How a tensioned cable's pull on a disk, which points along the chord to the *next*
+/// disk (not yet integrated when the pass reaches this disk), is resolved.
+///
+/// Both solve the same equations to the same tolerance; they differ in cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CableCoupling {
+    /// Each disk-to-disk segment is solved for its next hole positions inside the pass
+    /// (a local Newton whose matrix comes from the last Jacobian sweep), so Newton
+    /// shoots only for the base wrench (6 unknowns); the sweep carries 3 extra dual
+    /// directions per tensioned cable over one segment at a time and folds them in
+    /// exactly (implicit function theorem per segment). Falls back to `exact` when more
+    /// than six tensioned cables pass one disk.
+    #[default]
+    Condensed,
+    /// The hole positions of every tensioned cable on route disks 1..K-1 are shooting
+    /// unknowns beside the base wrench (3 per hole), with matching residuals.
+    Exact,
+}
+
 /// How the guide disks' mass enters the model.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -76,6 +96,8 @@ pub struct SolverSettings {
     pub continuation: bool,
     /// Largest number of continuation steps (default 32).
     pub max_continuation_steps: usize,
+    /// How tensioned cables' next-chord directions are resolved (default `condensed`).
+    pub cable_coupling: CableCoupling,
 }
 
 impl Default for SolverSettings {
@@ -88,6 +110,7 @@ impl Default for SolverSettings {
             tolerance: 1e-10,
             continuation: true,
             max_continuation_steps: 32,
+            cable_coupling: CableCoupling::default(),
         }
     }
 }

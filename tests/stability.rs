@@ -244,11 +244,13 @@ fn every_estimation_method_converges_inside_the_documented_region() {
 fn outside_the_region_methods_return_a_failure_status() {
     let sc = scene();
     let robot = sc.build_robot().unwrap();
-    // the rod past doubling back under one cable: no shooting start converges
+    // the rod far past doubling back under one cable: no shooting start converges
+    // (the condensed cable coupling still converges at 4-6 on equilibria the reference
+    // tracker, which stops at 3.5, does not reach: README "Where methods fail")
     for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
         for continuation in [false, true] {
             let mut m = rod(model, 32, continuation).build(&robot).unwrap();
-            for g in [5.0, 6.0, 8.0] {
+            for g in [7.0, 8.0] {
                 let t0 = Instant::now();
                 let rep = m
                     .solve(&loads_at(&robot, &sc.loads, Dir::Tension, g), Start::Cold)

@@ -5,7 +5,7 @@ mod steppers;
 
 pub use steppers::{dp45_step, rk4_step, Dp45Outcome, ErrScale};
 
-use crate::math::{skew, Real};
+use crate::math::{cross, mat_skew, mat_t_vec, mat_vec, Real};
 use nalgebra::{Matrix3, Vector3};
 
 /// Backbone state at one arc length, all in the world frame:
@@ -27,12 +27,17 @@ impl<T: Real> State<T> {
     /// `self + h k` for a derivative `k`.
     #[inline(always)]
     pub fn add_scaled(&self, k: &State<T>, h: f64) -> State<T> {
-        State {
-            r: self.r + k.r.map(|x| x.scale(h)),
-            rot: self.rot + k.rot.map(|x| x.scale(h)),
-            n: self.n + k.n.map(|x| x.scale(h)),
-            m: self.m + k.m.map(|x| x.scale(h)),
-        }
+        let mut out = *self;
+        let axpy = |o: &mut [T], k: &[T]| {
+            for (oi, ki) in o.iter_mut().zip(k) {
+                *oi += ki.scale(h);
+            }
+        };
+        axpy(out.r.as_mut_slice(), k.r.as_slice());
+        axpy(out.rot.as_mut_slice(), k.rot.as_slice());
+        axpy(out.n.as_mut_slice(), k.n.as_slice());
+        axpy(out.m.as_mut_slice(), k.m.as_slice());
+        out
     }
     /// Value parts as plain `f64`.
     pub fn value(&self) -> State<f64> {
@@ -82,21 +87,25 @@ fn cmul<T: Real>(a: &Vector3<T>, k: &Vector3<f64>) -> Vector3<T> {
 /// (`u+ = C+^-1 (C- (u- - u-*) - R^T tau) + u+*`, section 3.5 generalised).
 #[inline(always)]
 pub fn rhs<T: Real>(y: &State<T>, c: &Coeffs) -> State<T> {
-    let rt = y.rot.transpose();
     let v = if c.kirchhoff {
         Vector3::new(T::zero(), T::zero(), T::one())
     } else {
-        let mut v = cmul(&(rt * y.n), &c.inv_d);
+        let mut v = cmul(&mat_t_vec(&y.rot, &y.n), &c.inv_d);
         v.z += T::one();
         v
     };
-    let u = cmul(&(rt * y.m), &c.inv_c) + c.u_star.map(T::cst);
-    let rdot = y.rot * v;
+    let mut u = cmul(&mat_t_vec(&y.rot, &y.m), &c.inv_c);
+    for i in 0..3 {
+        if c.u_star[i] != 0.0 {
+            u[i] += T::cst(c.u_star[i]);
+        }
+    }
+    let rdot = mat_vec(&y.rot, &v);
     State {
         r: rdot,
-        rot: y.rot * skew(&u),
-        n: -c.f.map(T::cst),
-        m: -rdot.cross(&y.n),
+        rot: mat_skew(&y.rot, &u),
+        n: Vector3::new(T::cst(-c.f.x), T::cst(-c.f.y), T::cst(-c.f.z)),
+        m: cross(&y.n, &rdot),
     }
 }
 

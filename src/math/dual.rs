@@ -156,6 +156,15 @@ impl<const N: usize> Real for Dual<N> {
         }
         Self { v: self.v * k, d }
     }
+    const DIRS: usize = N;
+    #[inline(always)]
+    fn eps(&self) -> &[f64] {
+        &self.d
+    }
+    #[inline(always)]
+    fn eps_mut(&mut self) -> &mut [f64] {
+        &mut self.d
+    }
 }
 
 #[cfg(test)]

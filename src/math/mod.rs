@@ -4,10 +4,12 @@
 //! Nothing here knows about rods or robots.
 
 mod dual;
+mod kernels;
 mod lu;
 mod so3;
 
 pub use dual::Dual;
+pub use kernels::{cross, gram, mat_mul, mat_skew, mat_t_vec, mat_vec, mat_vec_f64};
 pub use lu::DenseLu;
 pub use so3::{exp_so3, orthonormalize, rotation_angle_between, skew};
 
@@ -44,6 +46,12 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// Multiply by a plain `f64` (cheaper than promoting it to `Self`).
     fn scale(self, k: f64) -> Self;
+    /// Number of derivative directions carried (0 for `f64`).
+    const DIRS: usize;
+    /// The derivative parts (empty for `f64`).
+    fn eps(&self) -> &[f64];
+    /// The derivative parts, mutable (empty for `f64`).
+    fn eps_mut(&mut self) -> &mut [f64];
 }
 
 impl Real for f64 {
@@ -62,5 +70,14 @@ impl Real for f64 {
     #[inline(always)]
     fn scale(self, k: f64) -> Self {
         self * k
+    }
+    const DIRS: usize = 0;
+    #[inline(always)]
+    fn eps(&self) -> &[f64] {
+        &[]
+    }
+    #[inline(always)]
+    fn eps_mut(&mut self) -> &mut [f64] {
+        &mut []
     }
 }

@@ -1,6 +1,6 @@
 //! Rotation helpers over any [`Real`] scalar.
 
-use super::Real;
+use super::{gram, mat_mul, Real};
 use nalgebra::{Matrix3, Vector3};
 
 /// The hat map `u -> u^`, thesis eq. 2.5: `u^ w = u x w`.
@@ -16,13 +16,13 @@ pub fn skew<T: Real>(u: &Vector3<T>) -> Matrix3<T> {
 /// integration step it keeps `R^T R = I` to round-off (drift of RK4 is O(h^5)).
 #[inline(always)]
 pub fn orthonormalize<T: Real>(r: &Matrix3<T>) -> Matrix3<T> {
-    let rtr = r.transpose() * r;
-    let three = T::cst(3.0);
-    let mut m = -rtr;
-    m[(0, 0)] += three;
-    m[(1, 1)] += three;
-    m[(2, 2)] += three;
-    (r * m).map(|x| x.scale(0.5))
+    let mut m = gram(r);
+    m.iter_mut().for_each(|x| *x = x.scale(-0.5));
+    let half3 = T::cst(1.5);
+    m[(0, 0)] += half3;
+    m[(1, 1)] += half3;
+    m[(2, 2)] += half3;
+    mat_mul(r, &m)
 }
 
 /// Rodrigues' formula for a rotation vector (axis times angle, rad).

@@ -6,6 +6,17 @@
 //! `/L` of its holes on route disks 1..K-1 (needed for the chord towards the next,
 //! not yet integrated, disk). Residuals: `m(L+)/M` (and `n(L+)/F`), plus computed
 //! minus assumed hole positions `/L`. `F = EI/L^2`, `M = EI/L`.
+//!
+//! With the condensed coupling ([`crate::settings::CableCoupling::Condensed`]) the
+//! hole positions are not unknowns: at each disk the assumed next-hole positions
+//! `q` of the tensioned cables are solved inside the pass so that the next disk's
+//! computed holes `p(q)` equal them. An `f64` pass iterates the segment,
+//! `q <- q + M (p(q) - q)` with `M = (I - dp/dq)^-1` from the last dual sweep (the
+//! plain fixed point `M = I` before any sweep; the map contracts by roughly
+//! `T (h^2/6 + rho h/2) / EI` for chord `h` and hole radius `rho`). A dual pass does not
+//! iterate: it seeds `q` along extra local directions, and at the next disk folds
+//! them into the outer ones with `dq/dz = (I - dp/dq)^-1 dp/dz|_q` (the implicit
+//! function theorem for the segment), so its outer derivatives are exact.
 
 use super::plan::{Event, ParamSite, Plan};
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
@@ -59,6 +70,25 @@ pub(crate) struct PassBuf<T: Real> {
     /// Hole positions per cable per route disk (world).
     pub holes: Vec<Vec<Vector3<T>>>,
     pub rhs_evals: u64,
+    /// Condensed coupling: segment re-integrations (local iterations) so far.
+    pub retries: u64,
+    /// Condensed coupling: tolerance of the local iteration as a fraction of the rod
+    /// length; [`LOCAL_TOL`] unless the outer Newton is still far away (inexact
+    /// Newton: an inner error far below the outer residual does not change the step).
+    pub local_tol: f64,
+    /// Condensed coupling: assumed position of hole `k + 1` used by the chord at
+    /// route disk `k`, per cable (world, m). Solved by `f64` passes, read by sweeps.
+    pub next: Vec<Vec<Vector3<f64>>>,
+    /// Condensed coupling: per guide, `M = (I - dp/dq)^-1` (`L x L` row-major,
+    /// `L = 3 * pending[g].len()`), written by dual passes.
+    pub mlin: Vec<Vec<f64>>,
+    /// `mlin` holds matrices from a sweep (else the plain fixed point is used).
+    pub mlin_valid: bool,
+    /// Condensed coupling: pose of each guide when its `next` holes were last
+    /// settled (`f64` passes); a new pass carries `next` along rigidly from it.
+    pub anchor: Vec<(Vector3<f64>, Matrix3<f64>)>,
+    /// Scratch for the per-segment linear solve of a dual pass.
+    lin: Vec<f64>,
 }
 
 impl<T: Real> PassBuf<T> {
@@ -70,6 +100,21 @@ impl<T: Real> PassBuf<T> {
             res: vec![T::zero(); plan.n_unknowns],
             holes: plan.cables.iter().map(|c| vec![z; c.len]).collect(),
             rhs_evals: 0,
+            retries: 0,
+            local_tol: LOCAL_TOL,
+            next: plan
+                .cables
+                .iter()
+                .map(|c| vec![Vector3::zeros(); c.len])
+                .collect(),
+            mlin: plan
+                .pending
+                .iter()
+                .map(|p| vec![0.0; 9 * p.len() * p.len()])
+                .collect(),
+            mlin_valid: false,
+            anchor: vec![(Vector3::zeros(), Matrix3::identity()); plan.pending.len()],
+            lin: vec![0.0; plan.max_local * (plan.max_local + T::DIRS + plan.max_local)],
         }
     }
 }
@@ -81,6 +126,43 @@ pub(crate) enum PassError {
     NonFinite(f64),
     /// The adaptive integrator hit its step limit.
     TooManySteps,
+    /// Condensed coupling: the next-hole positions of a segment ending at this arc
+    /// length did not settle.
+    Coupling(f64),
+}
+
+/// Condensed coupling: a segment's next holes must agree to this fraction of the rod
+/// length once the outer iteration is close (see [`PassBuf::local_tol`]), or stop
+/// improving below [`LOCAL_FLOOR`]. The boundary residual moves by about
+/// `T L^2 / (EI h)` times a scaled hole error (~100-1000 on the shipped rods), so the
+/// outer tolerance of 1e-10..1e-11 needs hole errors near round-off.
+pub(crate) const LOCAL_TOL: f64 = 1e-15;
+/// Condensed coupling: a segment whose hole error is below this fraction of the rod
+/// length and no longer shrinks by 4x per iteration has reached round-off.
+const LOCAL_FLOOR: f64 = 1e-12;
+/// Condensed coupling: segment re-integrations allowed per disk.
+const MAX_LOCAL_ITERATIONS: usize = 60;
+/// Condensed coupling: after this many iterations `M` from the sweep is dropped for
+/// the plain fixed point (an outdated `M` can cycle).
+const SWEEP_M_ITERATIONS: usize = 12;
+
+/// Where a pass can return to re-integrate a segment (condensed coupling).
+struct Checkpoint<T: Real> {
+    /// Guide whose chords use the assumed next holes.
+    g: usize,
+    /// Interval whose events include that guide, and the event's index.
+    iv: usize,
+    ev: usize,
+    /// State before the guide's event.
+    y: State<T>,
+    /// Recorded samples at that point.
+    samples: usize,
+    /// Adaptive step size there, so that every attempt (and a dual pass) takes the
+    /// same steps for the same state.
+    h_adapt: f64,
+    iterations: usize,
+    /// Largest hole error of the previous attempt (m).
+    last_error: f64,
 }
 
 #[inline]
@@ -165,65 +247,112 @@ pub(crate) fn pass<T: Real>(
     };
     let mut h_adapt = ls / 16.0;
     let mut steps_taken = 0usize;
-    for iv in &plan.intervals {
+    let mut check: Option<Checkpoint<T>> = None;
+    let mut resume: Option<usize> = None;
+    let mut i = 0;
+    'intervals: while i < plan.intervals.len() {
+        let iv = &plan.intervals[i];
         let c = plan.coeffs_for(iv, load_scale);
-        if let Some(r) = rec.as_deref_mut() {
-            push_sample(r, iv.s0, &y, &c);
-        }
-        match plan.integrator {
-            crate::settings::Integrator::Rk4 { .. } => {
-                let h = (iv.s1 - iv.s0) / iv.steps as f64;
-                for k in 0..iv.steps {
-                    y = rk4_step(&y, h, &c);
-                    buf.rhs_evals += 4;
-                    if let Some(r) = rec.as_deref_mut() {
-                        push_sample(r, iv.s0 + h * (k + 1) as f64, &y, &c);
-                    }
+        let first_event = match resume.take() {
+            Some(e) => e,
+            None => {
+                if let Some(r) = rec.as_deref_mut() {
+                    push_sample(r, iv.s0, &y, &c);
                 }
-            }
-            crate::settings::Integrator::Adaptive { tol, max_steps } => {
-                let mut s = iv.s0;
-                while s < iv.s1 {
-                    let h = h_adapt.min(iv.s1 - s);
-                    let out = dp45_step(&y, h, &c, tol, &scale);
-                    buf.rhs_evals += 7;
-                    steps_taken += 1;
-                    if steps_taken > max_steps {
-                        return Err(PassError::TooManySteps);
-                    }
-                    let err = if out.err.is_finite() { out.err } else { 1e10 };
-                    if err <= 1.0 {
-                        y = out.y;
-                        s = if iv.s1 - s - h <= 1e-14 * ls {
-                            iv.s1
-                        } else {
-                            s + h
-                        };
-                        if let Some(r) = rec.as_deref_mut() {
-                            push_sample(r, s, &y, &c);
+                match plan.integrator {
+                    crate::settings::Integrator::Rk4 { .. } => {
+                        let h = (iv.s1 - iv.s0) / iv.steps as f64;
+                        for k in 0..iv.steps {
+                            y = rk4_step(&y, h, &c);
+                            buf.rhs_evals += 4;
+                            if let Some(r) = rec.as_deref_mut() {
+                                push_sample(r, iv.s0 + h * (k + 1) as f64, &y, &c);
+                            }
                         }
                     }
-                    let fac = if err == 0.0 {
-                        5.0
-                    } else {
-                        (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
-                    };
-                    let clipped = h < h_adapt;
-                    h_adapt = if err <= 1.0 && clipped {
-                        h_adapt.max(h * fac)
-                    } else {
-                        h * fac
-                    };
-                    if h_adapt < 1e-14 * ls {
-                        return Err(PassError::NonFinite(s));
+                    crate::settings::Integrator::Adaptive { tol, max_steps } => {
+                        let mut s = iv.s0;
+                        while s < iv.s1 {
+                            let h = h_adapt.min(iv.s1 - s);
+                            let out = dp45_step(&y, h, &c, tol, &scale);
+                            buf.rhs_evals += 7;
+                            steps_taken += 1;
+                            if steps_taken > max_steps {
+                                return Err(PassError::TooManySteps);
+                            }
+                            let err = if out.err.is_finite() { out.err } else { 1e10 };
+                            if err <= 1.0 {
+                                y = out.y;
+                                s = if iv.s1 - s - h <= 1e-14 * ls {
+                                    iv.s1
+                                } else {
+                                    s + h
+                                };
+                                if let Some(r) = rec.as_deref_mut() {
+                                    push_sample(r, s, &y, &c);
+                                }
+                            }
+                            let fac = if err == 0.0 {
+                                5.0
+                            } else {
+                                (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
+                            };
+                            let clipped = h < h_adapt;
+                            h_adapt = if err <= 1.0 && clipped {
+                                h_adapt.max(h * fac)
+                            } else {
+                                h * fac
+                            };
+                            if h_adapt < 1e-14 * ls {
+                                return Err(PassError::NonFinite(s));
+                            }
+                        }
                     }
                 }
+                if !y.is_finite() {
+                    return Err(PassError::NonFinite(iv.s1));
+                }
+                iv.events.start
             }
-        }
-        if !y.is_finite() {
-            return Err(PassError::NonFinite(iv.s1));
-        }
-        for e in iv.events.clone() {
+        };
+        for e in first_event..iv.events.end {
+            if let (true, Event::Guide(g)) = (plan.condensed, plan.events[e]) {
+                if let Some(ck) = check.as_mut().filter(|ck| ck.g + 1 == g) {
+                    if T::DIRS > 0 {
+                        fold_segment(plan, buf, &mut y, ck.g);
+                    } else if !settle_segment(plan, buf, &y, ck) {
+                        if ck.iterations > MAX_LOCAL_ITERATIONS {
+                            return Err(PassError::Coupling(iv.s1));
+                        }
+                        // re-integrate the segment with the updated next holes
+                        buf.retries += 1;
+                        y = ck.y;
+                        h_adapt = ck.h_adapt;
+                        if let Some(r) = rec.as_deref_mut() {
+                            r.samples.truncate(ck.samples);
+                        }
+                        i = ck.iv;
+                        resume = Some(ck.ev);
+                        continue 'intervals;
+                    }
+                    check = None;
+                }
+                if !plan.pending[g].is_empty() && check.as_ref().is_none_or(|ck| ck.g != g) {
+                    if T::DIRS == 0 {
+                        transport_next(plan, buf, &y, g);
+                    }
+                    check = Some(Checkpoint {
+                        g,
+                        iv: i,
+                        ev: e,
+                        y,
+                        samples: rec.as_deref().map_or(0, |r| r.samples.len()),
+                        h_adapt,
+                        iterations: 0,
+                        last_error: f64::INFINITY,
+                    });
+                }
+            }
             apply_event(
                 plan,
                 plan.events[e],
@@ -233,6 +362,7 @@ pub(crate) fn pass<T: Real>(
                 rec.as_deref_mut(),
             );
         }
+        i += 1;
     }
     let off = if plan.closed_form {
         0
@@ -345,7 +475,18 @@ fn apply_event<T: Real>(
                 };
                 // the cable pulls the disk along both straight chords (thesis 3.8.1 routing)
                 let mut f = unit(prev - p).map(|x| x * t);
-                if k + 1 < c.len {
+                if k + 1 < c.len && plan.condensed {
+                    let mut next = v3::<T>(&buf.next[j][k]);
+                    if T::DIRS > 0 {
+                        // local directions of this segment (folded at the next disk)
+                        let pos = plan.pending[g].iter().position(|&(jj, _)| jj == j);
+                        let base = T::DIRS - plan.max_local + 3 * pos.unwrap_or(0);
+                        for a in 0..3 {
+                            next[a].eps_mut()[base + a] = 1.0;
+                        }
+                    }
+                    f += unit(next - p).map(|x| x * t);
+                } else if k + 1 < c.len {
                     if let Some(u) = c.unknowns {
                         let i0 = u + 3 * k;
                         let next = Vector3::new(buf.x[i0], buf.x[i0 + 1], buf.x[i0 + 2])
@@ -358,6 +499,164 @@ fn apply_event<T: Real>(
             }
         }
     }
+}
+
+/// Computed position of hole `k + 1` of cable `j` at the current disk.
+#[inline]
+fn next_hole<T: Real>(plan: &Plan, y: &State<T>, j: usize, k: usize) -> Vector3<T> {
+    y.r + y.rot * v3::<T>(&plan.cables[j].hole_local[k + 1])
+}
+
+/// `f64` pass reaching guide `g`: move the assumed next holes rigidly with the disk
+/// from where they were last settled (`q <- r + R R_a^T (q - r_a)`), so that only
+/// the segment's change of shape is left for the local iteration.
+fn transport_next<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &State<T>, g: usize) {
+    let (r, rot) = (y.r.map(|x| x.re()), y.rot.map(|x| x.re()));
+    let (ra, rota) = buf.anchor[g];
+    let map = rot * rota.transpose();
+    for &(j, k) in &plan.pending[g] {
+        let q = &mut buf.next[j][k];
+        *q = r + map * (*q - ra);
+    }
+    buf.anchor[g] = (r, rot);
+}
+
+/// `f64` pass at the disk after `ck.g`: compare the computed holes with the assumed
+/// ones; `true` when they agree, else update the assumed ones (Newton with the
+/// sweep's `M`, or the plain fixed point) and count the iteration.
+fn settle_segment<T: Real>(
+    plan: &Plan,
+    buf: &mut PassBuf<T>,
+    y: &State<T>,
+    ck: &mut Checkpoint<T>,
+) -> bool {
+    let pend = &plan.pending[ck.g];
+    let l = 3 * pend.len();
+    let mut err = [0.0; 3 * super::plan::MAX_CONDENSED_CABLES];
+    let mut worst = 0.0f64;
+    for (i, &(j, k)) in pend.iter().enumerate() {
+        let p = next_hole(plan, y, j, k).map(|x| x.re());
+        for a in 0..3 {
+            err[3 * i + a] = p[a] - buf.next[j][k][a];
+            worst = worst.max(err[3 * i + a].abs());
+        }
+    }
+    let stagnated = worst <= LOCAL_FLOOR * plan.length && worst > 0.25 * ck.last_error;
+    if worst <= buf.local_tol * plan.length || stagnated {
+        return true;
+    }
+    ck.last_error = worst;
+    let use_m = buf.mlin_valid && ck.iterations < SWEEP_M_ITERATIONS;
+    let m = &buf.mlin[ck.g];
+    for (i, &(j, k)) in pend.iter().enumerate() {
+        for a in 0..3 {
+            let r = 3 * i + a;
+            let step = if use_m {
+                (0..l).map(|c| m[r * l + c] * err[c]).sum()
+            } else {
+                err[r]
+            };
+            buf.next[j][k][a] += step;
+        }
+    }
+    ck.iterations += 1;
+    false
+}
+
+/// Dual pass at the disk after `g`: with `a = dp/dz` (outer directions) and
+/// `A = dp/dq` (the segment's local directions) read off the computed holes, the
+/// consistent `dq/dz = (I - A)^-1 a` is folded into the state, which then carries
+/// exact outer derivatives only. Also stores `M = (I - A)^-1` for `f64` passes.
+fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut State<T>, g: usize) {
+    let pend = &plan.pending[g];
+    let l = 3 * pend.len();
+    let nout = T::DIRS - plan.max_local;
+    let w = nout + l;
+    let (mat, rhs) = buf.lin.split_at_mut(plan.max_local * plan.max_local);
+    // (I - A) into mat (l x l), [a | I] into rhs (l x w)
+    for (i, &(j, k)) in pend.iter().enumerate() {
+        let p = next_hole(plan, y, j, k);
+        for a in 0..3 {
+            let r = 3 * i + a;
+            let e = p[a].eps();
+            for c in 0..l {
+                mat[r * l + c] = if r == c { 1.0 } else { 0.0 } - e[nout + c];
+                rhs[r * w + nout + c] = if r == c { 1.0 } else { 0.0 };
+            }
+            rhs[r * w..r * w + nout].copy_from_slice(&e[..nout]);
+        }
+    }
+    if !solve_small(&mut mat[..l * l], l, &mut rhs[..l * w], w) {
+        // singular segment map: leave the local parts unfolded (the Jacobian is then
+        // inexact, which the outer Newton's line search tolerates) and drop M
+        buf.mlin_valid = false;
+        return;
+    }
+    let m = &mut buf.mlin[g];
+    for r in 0..l {
+        m[r * l..(r + 1) * l].copy_from_slice(&rhs[r * w + nout..(r + 1) * w]);
+    }
+    buf.mlin_valid = true;
+    let fold = |z: &mut T| {
+        let e = z.eps_mut();
+        for c in 0..l {
+            let lc = e[nout + c];
+            if lc != 0.0 {
+                for o in 0..nout {
+                    e[o] += lc * rhs[c * w + o];
+                }
+            }
+            e[nout + c] = 0.0;
+        }
+    };
+    y.r.iter_mut().for_each(fold);
+    y.rot.iter_mut().for_each(fold);
+    y.n.iter_mut().for_each(fold);
+    y.m.iter_mut().for_each(fold);
+}
+
+/// Solve `a x = b` in place (`a` is `n x n`, `b` is `n x w`, row-major) by Gaussian
+/// elimination with partial pivoting; `false` when `a` is singular.
+fn solve_small(a: &mut [f64], n: usize, b: &mut [f64], w: usize) -> bool {
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&x, &y| a[x * n + col].abs().total_cmp(&a[y * n + col].abs()))
+            .unwrap_or(col);
+        if a[piv * n + col].abs() < 1e-14 {
+            return false;
+        }
+        if piv != col {
+            for c in 0..n {
+                a.swap(piv * n + c, col * n + c);
+            }
+            for c in 0..w {
+                b.swap(piv * w + c, col * w + c);
+            }
+        }
+        let inv = 1.0 / a[col * n + col];
+        for r in col + 1..n {
+            let f = a[r * n + col] * inv;
+            if f != 0.0 {
+                for c in col..n {
+                    a[r * n + c] -= f * a[col * n + c];
+                }
+                for c in 0..w {
+                    b[r * w + c] -= f * b[col * w + c];
+                }
+            }
+        }
+    }
+    for col in (0..n).rev() {
+        let inv = 1.0 / a[col * n + col];
+        for c in 0..w {
+            let mut v = b[col * w + c];
+            for k in col + 1..n {
+                v -= a[col * n + k] * b[k * w + c];
+            }
+            b[col * w + c] = v * inv;
+        }
+    }
+    true
 }
 
 trait ZerosT<T: Real> {

@@ -9,7 +9,7 @@ use crate::error::ModelError;
 use crate::integrate::Coeffs;
 use crate::loads::{Frame, Loads};
 use crate::robot::Robot;
-use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
+use crate::settings::{CableCoupling, GuideMass, Integrator, RodModel, SolverSettings};
 use nalgebra::{Matrix3, Vector3};
 
 /// An event applied at the end of an interval.
@@ -115,7 +115,20 @@ pub(crate) struct Plan {
     pub point_params: Vec<Vec<usize>>,
     /// Tension parameter of each cable.
     pub tension_param: Vec<Option<usize>>,
+    /// Condensed cable coupling ([`crate::settings::CableCoupling::Condensed`]): the
+    /// next-hole positions are solved per segment inside the pass, not shot for.
+    pub condensed: bool,
+    /// Per guide: `(cable, route position)` of the tensioned cables whose next hole
+    /// (route position + 1, on the next guide) the chord at this guide points to.
+    /// Filled only when `condensed`.
+    pub pending: Vec<Vec<(usize, usize)>>,
+    /// Largest `3 * pending[g].len()`: the local dual directions a sweep carries.
+    pub max_local: usize,
 }
+
+/// Tensioned cables through one disk that the condensed coupling handles (3 local
+/// dual directions each; sweeps are compiled for up to 18 local directions).
+pub(crate) const MAX_CONDENSED_CABLES: usize = 6;
 
 impl Plan {
     pub fn new(
@@ -248,11 +261,35 @@ impl Plan {
         let tensioned = (0..robot.cables().len()).any(is_tensioned);
         let closed_form = !body_loads && !tensioned;
         let mut n_unknowns = if closed_form { 3 } else { 6 };
+        // Condensed coupling needs every pending chord at guide g to end on guide
+        // g + 1 (routes run through consecutive disks) and few enough cables per disk.
+        let mut pending = vec![Vec::new(); robot.guides().len()];
+        for (j, c) in robot.cables().iter().enumerate() {
+            if is_tensioned(j) {
+                for k in 0..c.route.len().saturating_sub(1) {
+                    pending[c.route[k]].push((j, k));
+                }
+            }
+        }
+        let consecutive = robot
+            .cables()
+            .iter()
+            .enumerate()
+            .all(|(j, c)| !is_tensioned(j) || c.route.windows(2).all(|w| w[1] == w[0] + 1));
+        let max_pending = pending.iter().map(Vec::len).max().unwrap_or(0);
+        let condensed = settings.cable_coupling == CableCoupling::Condensed
+            && consecutive
+            && max_pending > 0
+            && max_pending <= MAX_CONDENSED_CABLES;
+        if !condensed {
+            pending.iter_mut().for_each(Vec::clear);
+        }
+        let max_local = if condensed { 3 * max_pending } else { 0 };
         for (j, c) in robot.cables().iter().enumerate() {
             for (k, &g) in c.route.iter().enumerate() {
                 guide_cables[g].push((j, k));
             }
-            let unknowns = if is_tensioned(j) && c.route.len() > 1 {
+            let unknowns = if !condensed && is_tensioned(j) && c.route.len() > 1 {
                 let u = n_unknowns;
                 n_unknowns += 3 * (c.route.len() - 1);
                 Some(u)
@@ -299,6 +336,9 @@ impl Plan {
             params: params.to_vec(),
             point_params,
             tension_param,
+            condensed,
+            pending,
+            max_local,
         };
         plan.points = loads
             .point

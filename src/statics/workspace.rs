@@ -1,7 +1,7 @@
 //! The reusable solver workspace: buffers sized once per plan, Newton with an exact
 //! dual-number Jacobian, backtracking line search, warm starts, load continuation.
 
-use super::pass::{pass, PassBuf, Recording};
+use super::pass::{pass, PassBuf, Recording, LOCAL_TOL};
 use super::plan::{ParamSite, Plan};
 use super::{GuidePose, Solution, SolveReport, SolveStatus};
 use crate::cables::{path_length, path_length_t, segments, CableLength};
@@ -11,6 +11,24 @@ use crate::math::{DenseLu, Dual};
 use crate::robot::Robot;
 use crate::settings::SolverSettings;
 use nalgebra::Vector3;
+
+/// Run `$body` with `$b` bound to the wide buffer, or give `$none` without one.
+macro_rules! with_wide {
+    ($w:expr, $b:ident => $body:expr) => {
+        with_wide!($w, $b => { $body; }, ())
+    };
+    ($w:expr, $b:ident => $body:expr, $none:expr) => {
+        match $w {
+            Wide::None => $none,
+            Wide::W9($b) => $body,
+            Wide::W12($b) => $body,
+            Wide::W15($b) => $body,
+            Wide::W18($b) => $body,
+            Wide::W21($b) => $body,
+            Wide::W24($b) => $body,
+        }
+    };
+}
 
 /// Newton iterations a cold start gets before continuation takes over.
 const COLD_BUDGET: usize = 4;
@@ -51,6 +69,10 @@ pub struct Workspace {
     b64: PassBuf<f64>,
     b3: PassBuf<Dual<3>>,
     b6: PassBuf<Dual<6>>,
+    /// Condensed coupling: the sweep buffer with the plan's local directions.
+    wide: Wide,
+    /// Load scale and outcome of the last `f64` pass (its unknowns are `b64.x`).
+    last_pass: Option<f64>,
     has_solution: bool,
     /// d(shooting residual)/d[x; theta], row-major `n x (n + p)`.
     sens_s: Vec<f64>,
@@ -93,6 +115,8 @@ impl Workspace {
             b64: PassBuf::new(&plan),
             b3: PassBuf::new(&plan),
             b6: PassBuf::new(&plan),
+            wide: Wide::new(&plan),
+            last_pass: None,
             x: vec![0.0; n],
             x_trial: vec![0.0; n],
             x_best: vec![0.0; n],
@@ -173,6 +197,7 @@ impl Workspace {
             self.b64.theta[k] = *v;
             self.b3.theta[k] = Dual::constant(*v);
             self.b6.theta[k] = Dual::constant(*v);
+            with_wide!(&mut self.wide, b => b.theta[k] = Dual::constant(*v));
         }
     }
 
@@ -214,7 +239,9 @@ impl Workspace {
         let c = self.plan.cables.len();
         let w = n + p;
         self.jac_evals += 1;
-        let ok = if w <= 3 {
+        let ok = if self.plan.condensed {
+            self.condensed_sweeps(w, true, 1.0)
+        } else if w <= 3 {
             sweep::<3>(
                 &self.plan,
                 &self.x,
@@ -244,6 +271,7 @@ impl Workspace {
             let v = self.b64.theta[k];
             self.b3.theta[k] = Dual::constant(v);
             self.b6.theta[k] = Dual::constant(v);
+            with_wide!(&mut self.wide, b => b.theta[k] = Dual::constant(v));
         }
         if !ok {
             return false;
@@ -310,6 +338,7 @@ impl Workspace {
         } else {
             COLD_BUDGET.min(self.settings.max_iterations)
         };
+        self.b64.local_tol = if warm { LOCAL_TOL } else { 1e-9 };
         let (mut status, it) = self.newton(1.0, budget);
         iterations += it;
         if !status.is_converged() && self.settings.continuation {
@@ -321,6 +350,11 @@ impl Workspace {
         if !status.is_converged() && self.best_res < max_abs(&self.res) {
             // hand back the best full-load iterate, not a partial-load point
             self.x.copy_from_slice(&self.x_best);
+            self.eval_at(false, 1.0);
+        }
+        if self.b64.local_tol > LOCAL_TOL {
+            // a failed solve's last point was evaluated with a loose inner tolerance
+            self.b64.local_tol = LOCAL_TOL;
             self.eval_at(false, 1.0);
         }
         self.has_solution = status.is_converged();
@@ -337,7 +371,39 @@ impl Workspace {
     }
 
     fn rhs_count(&self) -> u64 {
-        self.b64.rhs_evals + self.b3.rhs_evals + self.b6.rhs_evals
+        self.b64.rhs_evals
+            + self.b3.rhs_evals
+            + self.b6.rhs_evals
+            + with_wide!(&self.wide, b => b.rhs_evals, 0)
+    }
+
+    /// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer
+    /// directions with the plan's local directions, after making sure the assumed
+    /// next holes belong to `x` at load scale `lam` (an `f64` pass if not).
+    fn condensed_sweeps(&mut self, w: usize, with_theta: bool, lam: f64) -> bool {
+        if self.last_pass != Some(lam) || self.b64.x != self.x {
+            self.eval_at(false, lam);
+            if self.last_pass != Some(lam) {
+                return false;
+            }
+        }
+        let (plan, x, b64) = (&self.plan, &self.x, &mut self.b64);
+        let (jac_s, jac_m) = if with_theta {
+            (&mut self.sens_s[..], &mut self.sens_m[..])
+        } else {
+            (self.lu.matrix_mut(), &mut [][..])
+        };
+        with_wide!(&mut self.wide, b => {
+            b.next.clone_from(&b64.next);
+            let ok = (0..w).step_by(6).all(|c0| {
+                sweep(plan, x, c0, with_theta, b, jac_s, jac_m, lam)
+            });
+            if ok && b.mlin_valid {
+                b64.mlin.clone_from(&b.mlin);
+                b64.mlin_valid = true;
+            }
+            ok
+        }, false)
     }
 
     /// Straight-rod reactions as the starting point, loads scaled by `lam`.
@@ -356,6 +422,20 @@ impl Workspace {
             self.x[off + i] = m[i] / p.moment_scale;
         }
         let axis = p.base_rot * Vector3::z();
+        if p.condensed {
+            // straight-rod next holes; a cold start does not reuse an old segment map
+            self.b64.mlin_valid = false;
+            for (j, c) in p.cables.iter().enumerate() {
+                let route = &self.robot.cables()[j].route;
+                for k in 0..c.len.saturating_sub(1) {
+                    let s = self.robot.guides()[route[k + 1]].s;
+                    self.b64.next[j][k] = p.base_r + axis * s + p.base_rot * c.hole_local[k + 1];
+                }
+            }
+            for (g, a) in self.b64.anchor.iter_mut().enumerate() {
+                *a = (p.base_r + axis * self.robot.guides()[g].s, p.base_rot);
+            }
+        }
         for (j, c) in p.cables.iter().enumerate() {
             if let Some(u) = c.unknowns {
                 let route = &self.robot.cables()[j].route;
@@ -374,7 +454,9 @@ impl Workspace {
     fn eval_at(&mut self, trial: bool, lam: f64) -> bool {
         let src = if trial { &self.x_trial } else { &self.x };
         self.b64.x.copy_from_slice(src);
-        match pass(&self.plan, &mut self.b64, lam, None) {
+        let out = pass(&self.plan, &mut self.b64, lam, None);
+        self.last_pass = out.is_ok().then_some(lam);
+        match out {
             Ok(y) => {
                 self.tip = y.r;
                 self.res.copy_from_slice(&self.b64.res);
@@ -388,6 +470,9 @@ impl Workspace {
     fn jacobian(&mut self, lam: f64) -> bool {
         let n = self.plan.n_unknowns;
         self.jac_evals += 1;
+        if self.plan.condensed {
+            return self.condensed_sweeps(n, false, lam);
+        }
         let jac = self.lu.matrix_mut();
         if n <= 3 {
             sweep::<3>(
@@ -438,11 +523,22 @@ impl Workspace {
                 self.x_best.copy_from_slice(&self.x);
             }
             if max_abs(&self.res) <= self.settings.tolerance {
-                return (SolveStatus::Converged, it);
+                if self.b64.local_tol <= LOCAL_TOL {
+                    return (SolveStatus::Converged, it);
+                }
+                // confirm with fully settled segments (condensed coupling)
+                self.b64.local_tol = LOCAL_TOL;
+                if !self.eval_at(false, lam) {
+                    return (SolveStatus::NonFinite, it);
+                }
+                continue;
             }
             if chord_steps >= MAX_CHORD_STEPS {
                 self.lu_valid = false;
             }
+            // inexact inner solves while far away: 1e-10 of the outer residual,
+            // between LOCAL_TOL and 1e-9 (full accuracy once res < 1e-3)
+            self.b64.local_tol = (1e-10 * max_abs(&self.res)).clamp(LOCAL_TOL, 1e-9);
             let fresh = !self.lu_valid;
             if fresh && jacobians >= max_iterations {
                 return (SolveStatus::MaxIterations, it);
@@ -506,7 +602,9 @@ impl Workspace {
     /// Residual at `x_trial` into `b64.res`; `false` when the pass failed.
     fn eval_trial(&mut self, lam: f64) -> bool {
         self.b64.x.copy_from_slice(&self.x_trial);
-        match pass(&self.plan, &mut self.b64, lam, None) {
+        let out = pass(&self.plan, &mut self.b64, lam, None);
+        self.last_pass = out.is_ok().then_some(lam);
+        match out {
             Ok(y) => {
                 self.tip = y.r;
                 true
@@ -675,8 +773,10 @@ fn sweep<const N: usize>(
     let n = x.len();
     let p = if with_theta { buf.theta.len() } else { 0 };
     let w = n + p;
+    // the last `plan.max_local` directions are the condensed coupling's local ones
+    let nout = N - plan.max_local;
     let seed = |i: usize, v: f64| {
-        if i >= c0 && i < c0 + N {
+        if i >= c0 && i < c0 + nout {
             Dual::variable(v, i - c0)
         } else {
             Dual::constant(v)
@@ -691,7 +791,7 @@ fn sweep<const N: usize>(
     if pass(plan, buf, lam, None).is_err() {
         return false;
     }
-    let width = N.min(w - c0);
+    let width = nout.min(w - c0);
     for r in 0..n {
         for k in 0..width {
             jac_s[r * w + c0 + k] = buf.res[r].d[k];
@@ -720,4 +820,32 @@ fn max_abs(v: &[f64]) -> f64 {
 
 fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Sweep buffer of the condensed coupling: six outer directions plus the plan's
+/// `max_local` local ones (3 per tensioned cable through a disk, at most 18).
+enum Wide {
+    None,
+    W9(PassBuf<Dual<9>>),
+    W12(PassBuf<Dual<12>>),
+    W15(PassBuf<Dual<15>>),
+    W18(PassBuf<Dual<18>>),
+    W21(PassBuf<Dual<21>>),
+    W24(PassBuf<Dual<24>>),
+}
+
+impl Wide {
+    fn new(plan: &Plan) -> Self {
+        if !plan.condensed {
+            return Self::None;
+        }
+        match plan.max_local {
+            3 => Self::W9(PassBuf::new(plan)),
+            6 => Self::W12(PassBuf::new(plan)),
+            9 => Self::W15(PassBuf::new(plan)),
+            12 => Self::W18(PassBuf::new(plan)),
+            15 => Self::W21(PassBuf::new(plan)),
+            _ => Self::W24(PassBuf::new(plan)),
+        }
+    }
 }
