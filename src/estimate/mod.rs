@@ -14,10 +14,12 @@
 #![allow(clippy::needless_range_loop)]
 
 mod argmin_gn;
+mod joint;
 mod linalg;
 mod qp;
 mod spec;
 
+pub use joint::JointEstimator;
 pub use spec::{Axis, EstimateSpec, Method, UnknownKind, UnknownSpec};
 
 use crate::error::ModelError;
@@ -341,6 +343,25 @@ impl Estimator {
     /// for the workspace methods.
     pub fn tick(&mut self, changes: &[f64], sigma: Option<&[f64]>) -> EstimateStatus {
         let t0 = Instant::now();
+        let any = self.intake(changes, sigma);
+        self.iterations = 0;
+        self.jac_evals = 0;
+        self.status = if !any {
+            EstimateStatus::NoData
+        } else if self.spec.method == Method::ArgminGaussNewton {
+            argmin_gn::run(self)
+        } else {
+            self.run_workspace(t0)
+        };
+        self.finish();
+        self.elapsed = t0.elapsed().as_secs_f64();
+        self.status
+    }
+
+    /// Store a sample: finite changes with a finite positive sigma get weight
+    /// `1/sigma^2`, missing or NaN ones weight 0. `false` when there is nothing to
+    /// estimate from (no finite measurement and no prior).
+    fn intake(&mut self, changes: &[f64], sigma: Option<&[f64]>) -> bool {
         let mut any = self.prior_w.iter().any(|w| *w > 0.0);
         for j in 0..self.c {
             let m = changes.get(j).copied().unwrap_or(f64::NAN);
@@ -356,18 +377,7 @@ impl Estimator {
                 self.wts[j] = 0.0;
             }
         }
-        self.iterations = 0;
-        self.jac_evals = 0;
-        self.status = if !any {
-            EstimateStatus::NoData
-        } else if self.spec.method == Method::ArgminGaussNewton {
-            argmin_gn::run(self)
-        } else {
-            self.run_workspace(t0)
-        };
-        self.finish();
-        self.elapsed = t0.elapsed().as_secs_f64();
-        self.status
+        any
     }
 
     /// Forward solve at `theta`; lengths into `len`; `false` if it did not converge.
