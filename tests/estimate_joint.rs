@@ -325,7 +325,8 @@ fn bounds_are_respected_like_the_nested_method() {
 
 /// A one-iteration budget from a cold start far from the truth ends at
 /// `MaxIterations` with a finite estimate whose shape is nevertheless an
-/// equilibrium at the returned loads (re-solved, as the nested method keeps it).
+/// equilibrium at the returned loads (re-solved, as the nested method keeps it);
+/// an exhausted time budget ends at `TimeBudget` the same way.
 #[test]
 fn budget_exit_returns_an_equilibrium() {
     let pb = problem_a();
@@ -341,6 +342,18 @@ fn budget_exit_returns_an_equilibrium() {
     assert_eq!(j.tick(&changes, None), EstimateStatus::MaxIterations);
     assert!(j.theta().iter().all(|v| v.is_finite()));
     assert!(equilibrium_residual(j.workspace()) <= 1e-10);
+    // a time budget that is already spent at the first iteration: TimeBudget, the
+    // loads unchanged from the start (zero), the shape the equilibrium there
+    let mut jt = joint(
+        &pb,
+        EstimateSpec {
+            time_budget_s: Some(1e-12),
+            ..pb.spec(Method::LevenbergMarquardt)
+        },
+    );
+    assert_eq!(jt.tick(&changes, None), EstimateStatus::TimeBudget);
+    assert_eq!(jt.theta(), &[0.0, 0.0]);
+    assert!(equilibrium_residual(jt.workspace()) <= 1e-10);
     // and the next sample (full budget) finishes the job from there
     let mut j2 = joint(&pb, pb.spec(Method::LevenbergMarquardt));
     j2.set_theta(j.theta());
