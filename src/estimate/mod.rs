@@ -1,23 +1,54 @@
 //! Estimate layer: cable-length changes -> loads and shape.
 //!
-//! Design choice, nested versus joint: the forward shooting problem is solved to
-//! equilibrium for every trial `theta` (warm-started chord-Newton, a few f64
-//! passes), and the length sensitivities come from implicit differentiation of that
-//! equilibrium ([`Workspace::length_sensitivities`], one dual sweep over `[x; theta]`).
-//! A joint Newton on `[x; theta]` needs the same dual sweep per iteration but its
-//! intermediate iterates are not equilibria; nesting keeps every returned estimate a
-//! physically valid shape, which is what a time-budgeted control loop must hand back
-//! when it stops early. Measured here: the warm nested tick costs a few f64 passes
-//! plus an occasional sweep (see benches/README.md).
+//! Design choice, nested versus joint, decided by measurement (`benches/joint.rs`,
+//! log in `benches/README.md`, 2026-11-22, shared 2-core machine, methods compared
+//! within one run):
+//!
+//! * **Nested** ([`Estimator`], the default): the forward shooting problem is solved
+//!   to equilibrium for every trial `theta` (warm-started chord-Newton, a few f64
+//!   passes), and the length sensitivities come from implicit differentiation of
+//!   that equilibrium ([`Workspace::length_sensitivities`], one dual sweep over
+//!   `[x; theta]`), reused across iterations and samples with Broyden updates.
+//! * **Joint** ([`JointEstimator`], module `joint`): `x` and `theta` iterated
+//!   together as an equality-constrained least-squares problem (null-space
+//!   elimination of `dx`, LM on `theta`, l1 merit, second-order corrections), with
+//!   one exact dual sweep over `[x; theta]` at the current, not necessarily
+//!   equilibrium, point per iteration.
+//!
+//! Measured (medians; counts per tick are load-independent):
+//!
+//! | case | nested LM | nested LM, fresh sweeps | joint |
+//! |---|---|---|---|
+//! | warm tick, track demo (1 section, 3 cables, tip force) | **80 us**: 0 dual + 8 f64 passes | 459 us: 3 + 7 | 600 us: 3 + 5 |
+//! | cold, same scene | **463 us**: 2 + 21 | 1.00 ms: 5 + 17 | 792 us: 4 + 17 |
+//! | warm tick, two sections, two tensioned cables (36 shooting unknowns) | **0.82 ms**: 0 + 10 | 10.9 ms: 21 + 9 | 12.8 ms: 21 + 8 |
+//! | cold, same scene | **10.2 ms**: 13 + 18 | 21.6 ms: 34 + 15 | 12.0 ms: 28 + 16 |
+//! | unknown tensions from zero, 32 cases, 20 iterations | **32/32 converged** (mean 8 iterations) | | 16/32 (mean 13.7) |
+//!
+//! So the nested method is faster warm (7-16x: a warm tick needs no dual pass at
+//! all, while every joint iteration needs one, ~15x the cost of an f64 pass) and
+//! cold (1.2-1.7x), and more robust: its trial points are equilibria, so a large
+//! cold step is judged by the true cost, while the joint trial points (first-order
+//! predictor plus chord corrections) leave the equilibrium manifold and the l1
+//! merit then forces short steps. With the same sensitivity policy (an exact sweep
+//! every iteration) the joint method is the cheaper one (no inner forward solves:
+//! 20-45 % faster cold), but giving it reused linearisations would turn its chord
+//! corrections into the nested method's warm forward solve: the gap can close, not
+//! reverse. The nested method also keeps every returned estimate a physically valid
+//! shape when a time budget stops it early (the joint one re-solves the forward
+//! problem at its best `theta` for that). Hence the default is nested LM, and the
+//! joint method is a library type for comparisons, not a [`Method`].
 
 // Index loops below mirror the matrix formulas (G^T W G, ...) on flat buffers.
 #![allow(clippy::needless_range_loop)]
 
 mod argmin_gn;
+mod joint;
 mod linalg;
 mod qp;
 mod spec;
 
+pub use joint::JointEstimator;
 pub use spec::{Axis, EstimateSpec, Method, UnknownKind, UnknownSpec};
 
 use crate::error::ModelError;
@@ -341,6 +372,25 @@ impl Estimator {
     /// for the workspace methods.
     pub fn tick(&mut self, changes: &[f64], sigma: Option<&[f64]>) -> EstimateStatus {
         let t0 = Instant::now();
+        let any = self.intake(changes, sigma);
+        self.iterations = 0;
+        self.jac_evals = 0;
+        self.status = if !any {
+            EstimateStatus::NoData
+        } else if self.spec.method == Method::ArgminGaussNewton {
+            argmin_gn::run(self)
+        } else {
+            self.run_workspace(t0)
+        };
+        self.finish();
+        self.elapsed = t0.elapsed().as_secs_f64();
+        self.status
+    }
+
+    /// Store a sample: finite changes with a finite positive sigma get weight
+    /// `1/sigma^2`, missing or NaN ones weight 0. `false` when there is nothing to
+    /// estimate from (no finite measurement and no prior).
+    fn intake(&mut self, changes: &[f64], sigma: Option<&[f64]>) -> bool {
         let mut any = self.prior_w.iter().any(|w| *w > 0.0);
         for j in 0..self.c {
             let m = changes.get(j).copied().unwrap_or(f64::NAN);
@@ -356,18 +406,7 @@ impl Estimator {
                 self.wts[j] = 0.0;
             }
         }
-        self.iterations = 0;
-        self.jac_evals = 0;
-        self.status = if !any {
-            EstimateStatus::NoData
-        } else if self.spec.method == Method::ArgminGaussNewton {
-            argmin_gn::run(self)
-        } else {
-            self.run_workspace(t0)
-        };
-        self.finish();
-        self.elapsed = t0.elapsed().as_secs_f64();
-        self.status
+        any
     }
 
     /// Forward solve at `theta`; lengths into `len`; `false` if it did not converge.

@@ -12,6 +12,7 @@ mod workspace;
 
 pub use pass::{Pose, Sample};
 pub use plan::ParamSite;
+pub use workspace::joint::RhsCounts;
 pub use workspace::{Start, Workspace};
 
 use crate::cables::CableLength;

@@ -40,6 +40,11 @@ const CHORD_CONTRACTION: f64 = 0.1;
 /// Chord steps allowed per Jacobian before it is refreshed anyway.
 const MAX_CHORD_STEPS: usize = 8;
 
+// Joint-estimator methods (linearisation at any point): a child module, so it reads
+// the buffers above without widening their visibility.
+#[path = "joint.rs"]
+pub(super) mod joint;
+
 /// Where Newton starts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Start {

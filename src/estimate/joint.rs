@@ -1,0 +1,676 @@
+//! Joint (all-at-once, "simultaneous") estimator: the shooting unknowns `x` and the
+//! load unknowns `theta` are iterated together, instead of solving the forward
+//! problem to equilibrium for every trial `theta` as [`Estimator`] does.
+//!
+//! Problem (equality-constrained least squares; Nocedal & Wright, *Numerical
+//! Optimization*, 2nd ed., ch. 18):
+//!
+//! ```text
+//! min_{x, theta}  f = 1/2 sum_j w_j (l_j(x, theta) - l_ref_j - m_j)^2
+//!                   + 1/2 sum_k pi_k (theta_k - mu_k)^2
+//! s.t.            r(x, theta) = 0          (scaled shooting residual, statics docs)
+//! ```
+//!
+//! with `l` the cable lengths, `m` the measured changes, `w = 1/sigma^2` (0 for a
+//! missing/NaN sample), `pi = 1/sigma_prior^2`. Each iteration linearises `r` and
+//! `l` at the current `z = [x; theta]` with one dual-number sweep over `[x; theta]`
+//! ([`Workspace::joint_jacobians`](crate::statics::Workspace::joint_jacobians):
+//! `R_x, R_t, C_x, C_t`), and solves the linearised problem by eliminating `dx`
+//! through the linearised constraint `r + R_x dx + R_t dtheta = 0`:
+//!
+//! ```text
+//! a = -R_x^-1 r,  B = -R_x^-1 R_t,  dx = a + B dtheta       (null-space elimination, N&W 18.1)
+//! G = C_t + C_x B                    (= the implicit sensitivities dl/dtheta of the nested method)
+//! l~ = l + C_x a                     (lengths after the Newton correction of x)
+//! (G^T W G + P + mu D) dtheta = -(G^T W (l~ - l_ref - m) + P (theta - mu_prior))
+//! ```
+//!
+//! i.e. the nested method's Levenberg-Marquardt step with `l~` in place of the
+//! equilibrium lengths (the same Jacobi-scaled eigen pseudo-inverse, damping and
+//! projected active set as [`Estimator`]). At an equilibrium (`r = 0`) both methods
+//! take the same `dtheta`; the joint one moves `x` by the first-order predictor
+//! `B dtheta` instead of re-solving the forward problem.
+//!
+//! Globalisation: the `l1` merit `phi = f + nu ||r||_1` (N&W eq. 18.27), with the
+//! penalty at least twice the max-norm of the least-squares multiplier estimate
+//! (exactness, N&W theorem 17.3) and raised further when needed for the step to be
+//! a descent direction (N&W eq. 18.36 with `rho = 1/2`), never lowered within a
+//! sample; a trial is accepted when `phi` drops by at least `1e-4` of the
+//! predicted drop of the (undamped) model. A trial that is rejected or raised the
+//! constraint violation first gets second-order corrections `x -= R_x^-1 r(trial)`
+//! (N&W section 18.3, eq. 18.24: against the Maratos effect), repeated as chord
+//! steps with the factorisation at hand (one `f64` pass each) while they contract;
+//! if it is still rejected, the LM damping on `theta` is raised, and the `x` part
+//! is halved when it dominates the step. Residuals below half the forward
+//! tolerance count as satisfied in the merit (dead zone, see `l1`). Bounds by
+//! projection, as in [`Estimator`].
+//!
+//! Convergence: the `theta` step is below `tolerance (1 + |theta|)` (the spec's rule)
+//! and the scaled shooting residual is below the forward solver's `tolerance`,
+//! reached by chord steps with the last factorisation once `theta` is stationary.
+//! So a `Converged` estimate's shape is an equilibrium to the forward solver's own
+//! tolerance. Any other exit (`MaxIterations`, `TimeBudget`, `Stalled`) hands back
+//! the best `theta` (the merit decreases monotonically) with the shape re-solved to
+//! equilibrium at that `theta` (one warm forward solve, after the budget check), as
+//! the nested method does; `ForwardFailed` when that solve does not converge.
+//!
+//! The measured comparison with the nested method, and why the nested one stays the
+//! default, is in the module docs of [`crate::estimate`] and `benches/README.md`.
+
+use super::{
+    Estimate, EstimateError, EstimateSpec, EstimateStatus, Estimator, LM_MAX_CONVERGED_DAMPING,
+    MAX_TRIALS,
+};
+use crate::loads::Loads;
+use crate::math::DenseLu;
+use crate::robot::Robot;
+use crate::settings::SolverSettings;
+use crate::statics::{Start, Workspace};
+use std::time::Instant;
+
+/// Chord steps (reused factorisation) allowed to bring `r` below tolerance at a
+/// stationary `theta`.
+const MAX_POLISH: usize = 8;
+/// A chord step must shrink `||r||_inf` by this factor to count as progress.
+const POLISH_CONTRACTION: f64 = 0.5;
+/// Armijo fraction of the predicted merit decrease (N&W eq. 18.28 with `eta`).
+const ETA: f64 = 1e-4;
+
+/// Buffers of the joint iteration, sized once (`n` shooting unknowns, `p` loads,
+/// `c` cables, `w = n + p`).
+struct JointState {
+    n: usize,
+    x: Vec<f64>,
+    x_trial: Vec<f64>,
+    x_keep: Vec<f64>,
+    r_keep: Vec<f64>,
+    l_keep: Vec<f64>,
+    r: Vec<f64>,
+    r_trial: Vec<f64>,
+    l_trial: Vec<f64>,
+    /// `[R_x R_t]`, `n x w` row-major.
+    jr: Vec<f64>,
+    /// `[C_x C_t]`, `c x w` row-major.
+    jc: Vec<f64>,
+    lu: DenseLu,
+    /// `R_x^T`, factorised for the multiplier estimate.
+    lut: DenseLu,
+    /// `-R_x^-1 r`.
+    a: Vec<f64>,
+    /// `-R_x^-1 R_t`, `n x p` row-major.
+    b: Vec<f64>,
+    /// `l + C_x a`.
+    lt: Vec<f64>,
+    col: Vec<f64>,
+    /// `l1` penalty parameter of the merit.
+    nu: f64,
+}
+
+impl JointState {
+    fn new(n: usize, p: usize, c: usize) -> Self {
+        let w = n + p;
+        Self {
+            n,
+            x: vec![0.0; n],
+            x_trial: vec![0.0; n],
+            x_keep: vec![0.0; n],
+            r_keep: vec![0.0; n],
+            l_keep: vec![0.0; c],
+            r: vec![0.0; n],
+            r_trial: vec![0.0; n],
+            l_trial: vec![0.0; c],
+            jr: vec![0.0; n * w],
+            jc: vec![0.0; c * w],
+            lu: DenseLu::new(n),
+            lut: DenseLu::new(n),
+            a: vec![0.0; n],
+            b: vec![0.0; n * p],
+            lt: vec![0.0; c],
+            col: vec![0.0; n],
+            nu: 0.0,
+        }
+    }
+}
+
+/// The joint estimator: same problem, spec, statistics and [`Estimate`] as
+/// [`Estimator`] (which it wraps; `spec.method` is ignored), different iteration.
+/// Allocates once; [`JointEstimator::tick`] allocates nothing afterwards.
+pub struct JointEstimator {
+    est: Estimator,
+    st: JointState,
+}
+
+impl JointEstimator {
+    /// Build for `robot` under the known `loads`; unknowns add to them (as
+    /// [`Estimator::new`], including the reference lengths and the initial
+    /// equilibrium at the unknowns' `initial` values).
+    pub fn new(
+        robot: Robot,
+        loads: Loads,
+        settings: SolverSettings,
+        spec: EstimateSpec,
+    ) -> Result<Self, EstimateError> {
+        let mut est = Estimator::new(robot, loads, settings, spec)?;
+        let n = est.workspace().unknowns();
+        let st = JointState::new(n, est.p, est.c);
+        Ok(Self { est, st })
+    }
+
+    /// Process one sample: cable length changes (m, `NaN` = missing) and optional
+    /// per-cable noise (m), warm-started from the previous estimate and shape
+    /// (which need not be an equilibrium). No allocation.
+    pub fn tick(&mut self, changes: &[f64], sigma: Option<&[f64]>) -> EstimateStatus {
+        let t0 = Instant::now();
+        let any = self.est.intake(changes, sigma);
+        let est = &mut self.est;
+        est.iterations = 0;
+        est.jac_evals = 0;
+        est.status = if any {
+            run(est, &mut self.st, t0)
+        } else {
+            EstimateStatus::NoData
+        };
+        est.finish();
+        est.elapsed = t0.elapsed().as_secs_f64();
+        est.status
+    }
+
+    /// Current estimate (SI).
+    pub fn theta(&self) -> &[f64] {
+        self.est.theta()
+    }
+    /// Unknown names.
+    pub fn names(&self) -> &[String] {
+        self.est.names()
+    }
+    /// Status of the last sample.
+    pub fn status(&self) -> EstimateStatus {
+        self.est.status()
+    }
+    /// Iterations (linearisations) of the last sample.
+    pub fn iterations(&self) -> usize {
+        self.est.iterations
+    }
+    /// Dual-number sweeps over `[x; theta]` in the last sample.
+    pub fn jacobian_evals(&self) -> u64 {
+        self.est.jac_evals
+    }
+    /// Covariance of the last sample (see [`Estimator::covariance`]).
+    pub fn covariance(&self) -> &[f64] {
+        self.est.covariance()
+    }
+    /// Reference cable lengths (m).
+    pub fn reference_lengths(&self) -> &[f64] {
+        self.est.reference_lengths()
+    }
+    /// The spec.
+    pub fn spec(&self) -> &EstimateSpec {
+        self.est.spec()
+    }
+    /// The forward workspace (current shape).
+    pub fn workspace(&mut self) -> &mut Workspace {
+        self.est.workspace()
+    }
+    /// Tip position of the current estimate (m).
+    pub fn tip_position(&self) -> crate::nalgebra::Vector3<f64> {
+        self.est.tip_position()
+    }
+    /// Start the next sample from `theta` (clamped to the bounds).
+    pub fn set_theta(&mut self, theta: &[f64]) {
+        self.est.set_theta(theta);
+    }
+    /// Snapshot of the last sample (allocates; see [`Estimator::estimate`]).
+    pub fn estimate(&mut self) -> Estimate {
+        self.est.estimate()
+    }
+}
+
+/// `f` of the module docs at loads `th` and lengths `len`.
+fn data_cost(est: &Estimator, th: &[f64], len: &[f64]) -> f64 {
+    let mut cost = 0.0;
+    for j in 0..est.c {
+        if est.wts[j] > 0.0 {
+            let e = len[j] - est.ref_len[j] - est.meas[j];
+            cost += est.wts[j] * e * e;
+        }
+    }
+    for k in 0..est.p {
+        let d = th[k] - est.prior_mean[k];
+        cost += est.prior_w[k] * d * d;
+    }
+    0.5 * cost
+}
+
+/// Constraint violation of the merit: `sum_i max(|r_i| - tau, 0)`, the `l1` norm
+/// with a dead zone `tau` (half the forward solver's tolerance) below which a
+/// residual counts as satisfied. Without it, round-off-level residuals (1e-13)
+/// times the penalty (up to ~1e7 with noise weights 1e10) swamp the cost near the
+/// solution and every final step is rejected.
+fn l1(v: &[f64], tau: f64) -> f64 {
+    v.iter().map(|x| (x.abs() - tau).max(0.0)).sum::<f64>()
+        + if v.iter().any(|x| x.is_nan()) {
+            f64::INFINITY
+        } else {
+            0.0
+        }
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |a, x| {
+        if x.is_nan() {
+            f64::INFINITY
+        } else {
+            a.max(x.abs())
+        }
+    })
+}
+
+/// `f64` pass at `(x, theta)` (current: into `r`, `est.len`) or at
+/// `(x_trial, theta_trial)` (trial: into `r_trial`, `l_trial`); `false` when the
+/// integration failed or produced non-finite values.
+fn eval(est: &mut Estimator, st: &mut JointState, trial: bool) -> bool {
+    let ok = if trial {
+        est.ws.set_theta(&est.theta_trial);
+        let ok = est.ws.shooting_residual(&st.x_trial, &mut st.r_trial);
+        est.ws.cable_lengths_into(&mut st.l_trial);
+        ok && st.r_trial.iter().chain(&st.l_trial).all(|v| v.is_finite())
+    } else {
+        est.ws.set_theta(&est.theta);
+        let ok = est.ws.shooting_residual(&st.x, &mut st.r);
+        est.ws.cable_lengths_into(&mut est.len);
+        ok && st.r.iter().chain(&est.len).all(|v| v.is_finite())
+    };
+    if trial {
+        // the workspace's theta follows the accepted point, not the trial
+        est.ws.set_theta(&est.theta);
+    }
+    ok
+}
+
+/// One joint linearisation at the current point: `R`, `C` by one sweep, `R_x`
+/// factorised, then `a`, `B`, `G` (into `est.g`), `l~` and the reduced normal
+/// equations (into `est.h`, `est.grad`). `Err(status)` when it cannot be done.
+fn linearise(est: &mut Estimator, st: &mut JointState) -> Result<(), EstimateStatus> {
+    let (n, p, c) = (st.n, est.p, est.c);
+    let w = n + p;
+    est.jac_evals += 1;
+    if !est.ws.joint_jacobians(&st.x, &mut st.jr, &mut st.jc) {
+        return Err(EstimateStatus::ForwardFailed);
+    }
+    let m = st.lu.matrix_mut();
+    for i in 0..n {
+        m[i * n..(i + 1) * n].copy_from_slice(&st.jr[i * w..i * w + n]);
+    }
+    match st.lu.factor() {
+        // same conditioning threshold as the forward solver's Newton
+        Some(rc) if rc > 1e-14 => {}
+        _ => return Err(EstimateStatus::Stalled),
+    }
+    // least-squares multipliers of the constraint at the current point, from
+    // d/dx of the Lagrangian f + lambda^T r: R_x^T lambda = -C_x^T W e
+    // (N&W eq. 18.21); the l1 penalty is exact for nu > ||lambda||_inf (N&W
+    // theorem 17.3), so nu never drops below it (safety factor 2)
+    let mt = st.lut.matrix_mut();
+    for i in 0..n {
+        for k in 0..n {
+            mt[k * n + i] = st.jr[i * w + k];
+        }
+    }
+    if st.lut.factor().is_some() {
+        for i in 0..n {
+            let mut v = 0.0;
+            for j in 0..c {
+                if est.wts[j] > 0.0 {
+                    let e = est.len[j] - est.ref_len[j] - est.meas[j];
+                    v -= st.jc[j * w + i] * est.wts[j] * e;
+                }
+            }
+            st.col[i] = v;
+        }
+        st.lut.solve_in_place(&mut st.col);
+        let lam = max_abs(&st.col);
+        if lam.is_finite() {
+            st.nu = st.nu.max(2.0 * lam);
+        }
+    }
+    for i in 0..n {
+        st.a[i] = -st.r[i];
+    }
+    st.lu.solve_in_place(&mut st.a);
+    for k in 0..p {
+        for i in 0..n {
+            st.col[i] = -st.jr[i * w + n + k];
+        }
+        st.lu.solve_in_place(&mut st.col);
+        for i in 0..n {
+            st.b[i * p + k] = st.col[i];
+        }
+    }
+    for j in 0..c {
+        let row = &st.jc[j * w..(j + 1) * w];
+        let mut lt = est.len[j];
+        for i in 0..n {
+            lt += row[i] * st.a[i];
+        }
+        st.lt[j] = lt;
+        for k in 0..p {
+            let mut g = row[n + k];
+            for i in 0..n {
+                g += row[i] * st.b[i * p + k];
+            }
+            est.g[j * p + k] = g;
+        }
+    }
+    est.g_valid = true;
+    est.g_exact = true;
+    // reduced normal equations: residual l~ - l_ref - m, Jacobian G
+    est.h.iter_mut().for_each(|v| *v = 0.0);
+    for k in 0..p {
+        est.grad[k] = est.prior_w[k] * (est.theta[k] - est.prior_mean[k]);
+        est.h[k * p + k] = est.prior_w[k];
+    }
+    for j in 0..c {
+        let wj = est.wts[j];
+        if wj == 0.0 {
+            continue;
+        }
+        let e = st.lt[j] - est.ref_len[j] - est.meas[j];
+        for a in 0..p {
+            let ga = est.g[j * p + a];
+            est.grad[a] += wj * ga * e;
+            for b in 0..p {
+                est.h[a * p + b] += wj * ga * est.g[j * p + b];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Predicted value of `f` after the step `(alpha a + B s, s)` (`s = est.step`)
+/// from the linear models of `l` and `theta`.
+fn model_cost(est: &Estimator, st: &JointState, alpha: f64) -> f64 {
+    let p = est.p;
+    let mut cost = 0.0;
+    for j in 0..est.c {
+        if est.wts[j] > 0.0 {
+            let mut e = est.len[j] + alpha * (st.lt[j] - est.len[j]) - est.ref_len[j] - est.meas[j];
+            for k in 0..p {
+                e += est.g[j * p + k] * est.step[k];
+            }
+            cost += est.wts[j] * e * e;
+        }
+    }
+    for k in 0..p {
+        let d = est.theta[k] + est.step[k] - est.prior_mean[k];
+        cost += est.prior_w[k] * d * d;
+    }
+    0.5 * cost
+}
+
+/// Undamped Gauss-Newton predicted decrease from the current point (LM's
+/// stationarity certificate, as in [`Estimator`]).
+fn gn_predicted_decrease(est: &mut Estimator) -> f64 {
+    let p = est.p;
+    est.solve_step(0.0);
+    let mut pred = 0.0;
+    for a in 0..p {
+        pred -= est.grad[a] * est.step[a];
+        for b in 0..p {
+            pred -= 0.5 * est.step[a] * est.h[a * p + b] * est.step[b];
+        }
+    }
+    pred
+}
+
+/// Chord steps `x -= R_x^-1 r` at fixed `theta` with the current factorisation
+/// until `||r||_inf <= tol`. `(converged, moved)`; on failure the last contracting
+/// point is kept (it is closer to equilibrium at the same `theta`).
+fn polish(est: &mut Estimator, st: &mut JointState, tol: f64) -> (bool, bool) {
+    let n = st.n;
+    let mut moved = false;
+    for _ in 0..MAX_POLISH {
+        let res = max_abs(&st.r);
+        if res <= tol {
+            return (true, moved);
+        }
+        st.col.copy_from_slice(&st.r);
+        st.lu.solve_in_place(&mut st.col);
+        for i in 0..n {
+            st.x_trial[i] = st.x[i] - st.col[i];
+        }
+        est.theta_trial.copy_from_slice(&est.theta);
+        if !eval(est, st, true) || max_abs(&st.r_trial) > POLISH_CONTRACTION * res {
+            return (false, moved);
+        }
+        std::mem::swap(&mut st.x, &mut st.x_trial);
+        std::mem::swap(&mut st.r, &mut st.r_trial);
+        std::mem::swap(&mut est.len, &mut st.l_trial);
+        moved = true;
+    }
+    (max_abs(&st.r) <= tol, moved)
+}
+
+/// Chord steps `x_trial -= R_x^-1 r(trial)` at `theta_trial` with the current
+/// factorisation while they contract `||r||_inf` by [`POLISH_CONTRACTION`], until
+/// it is at most `target` or [`MAX_POLISH`] steps. The trial buffers end at the
+/// last contracting point; `false` when the workspace's last pass is not there.
+fn restore(est: &mut Estimator, st: &mut JointState, target: f64) -> bool {
+    let n = st.n;
+    let mut res = max_abs(&st.r_trial);
+    for _ in 0..MAX_POLISH {
+        if res <= target {
+            return true;
+        }
+        st.x_keep.copy_from_slice(&st.x_trial);
+        st.r_keep.copy_from_slice(&st.r_trial);
+        st.l_keep.copy_from_slice(&st.l_trial);
+        st.col.copy_from_slice(&st.r_trial);
+        st.lu.solve_in_place(&mut st.col);
+        for i in 0..n {
+            st.x_trial[i] -= st.col[i];
+        }
+        let ok = eval(est, st, true);
+        let new = max_abs(&st.r_trial);
+        if !ok || new > POLISH_CONTRACTION * res {
+            std::mem::swap(&mut st.x_trial, &mut st.x_keep);
+            std::mem::swap(&mut st.r_trial, &mut st.r_keep);
+            std::mem::swap(&mut st.l_trial, &mut st.l_keep);
+            return false;
+        }
+        res = new;
+    }
+    true
+}
+
+/// The joint iteration for one sample; leaves the workspace at the returned shape.
+fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus {
+    let (n, p) = (st.n, est.p);
+    let tol_r = est.ws.settings().tolerance;
+    let tau = 0.5 * tol_r;
+    st.x.copy_from_slice(est.ws.unknowns_vector());
+    if !eval(est, st, false) {
+        // the stored shape is unusable (e.g. after a failed sample): start from the
+        // forward model's equilibrium at theta instead
+        est.ws.set_theta(&est.theta);
+        if !est.ws.solve(Start::Cold).status.is_converged() {
+            return EstimateStatus::ForwardFailed;
+        }
+        st.x.copy_from_slice(est.ws.unknowns_vector());
+        if !eval(est, st, false) {
+            return EstimateStatus::ForwardFailed;
+        }
+    }
+    // `true` while the workspace's last f64 pass was at the current point
+    let mut ws_current = true;
+    let mut f = data_cost(est, &est.theta, &est.len);
+    let mut h1 = l1(&st.r, tau);
+    st.nu = 0.0;
+    est.mu = 1e-3;
+    for it in 0..est.spec.max_iterations {
+        est.iterations = it + 1;
+        if let Some(b) = est.spec.time_budget_s {
+            if t0.elapsed().as_secs_f64() > b {
+                return conclude(est, st, EstimateStatus::TimeBudget, ws_current);
+            }
+        }
+        if let Err(status) = linearise(est, st) {
+            return conclude(est, st, status, ws_current);
+        }
+        // projected Newton (Bertsekas), as the nested method
+        for k in 0..p {
+            est.active[k] = (est.theta[k] <= est.lb[k] && est.grad[k] > 0.0)
+                || (est.theta[k] >= est.ub[k] && est.grad[k] < 0.0);
+        }
+        let mut alpha = 1.0;
+        let mut trials = 0;
+        loop {
+            trials += 1;
+            if trials > MAX_TRIALS {
+                return conclude(est, st, EstimateStatus::Stalled, ws_current);
+            }
+            est.solve_step(est.mu);
+            let mut small = true;
+            for k in 0..p {
+                let t = (est.theta[k] + est.step[k] * alpha).clamp(est.lb[k], est.ub[k]);
+                est.theta_trial[k] = t;
+                est.step[k] = t - est.theta[k];
+                small &= est.step[k].abs() <= est.spec.tolerance * (1.0 + est.theta[k].abs());
+            }
+            if small {
+                if est.mu > LM_MAX_CONVERGED_DAMPING
+                    && gn_predicted_decrease(est) > 1e-9 * (1.0 + f)
+                {
+                    return conclude(est, st, EstimateStatus::Stalled, ws_current);
+                }
+                let (done, moved) = polish(est, st, tol_r);
+                if moved {
+                    est.g_exact = false;
+                    ws_current = true;
+                    f = data_cost(est, &est.theta, &est.len);
+                    h1 = l1(&st.r, tau);
+                }
+                if done {
+                    return conclude(est, st, EstimateStatus::Converged, ws_current);
+                }
+                if moved {
+                    break; // relinearise at the better point
+                }
+                // no chord progress: take the full step below (Newton on x with
+                // backtracking on the merit)
+                est.solve_step(est.mu);
+                for k in 0..p {
+                    let t = (est.theta[k] + est.step[k] * alpha).clamp(est.lb[k], est.ub[k]);
+                    est.theta_trial[k] = t;
+                    est.step[k] = t - est.theta[k];
+                }
+            }
+            let (mut xa, mut xb) = (0.0, 0.0);
+            for i in 0..n {
+                let da = alpha * st.a[i];
+                let mut db = 0.0;
+                for k in 0..p {
+                    db += st.b[i * p + k] * est.step[k];
+                }
+                xa += da * da;
+                xb += db * db;
+                st.x_trial[i] = st.x[i] + da + db;
+            }
+            // predicted decrease of the merit (linearised constraint: alpha ||r||_1)
+            let pred_f = f - model_cost(est, st, alpha);
+            let pred_c = alpha * h1;
+            if pred_c > 0.0 && pred_f < 0.0 {
+                // N&W eq. 18.36 (rho = 1/2): pred >= nu pred_c / 2 > 0
+                st.nu = st.nu.max(-2.0 * pred_f / pred_c);
+            }
+            let pred = pred_f + st.nu * pred_c;
+            let phi = f + st.nu * h1;
+            let accept = |ft: f64, h1t: f64, nu: f64| {
+                let phit = ft + nu * h1t;
+                phit.is_finite()
+                    && if pred > 0.0 {
+                        phi - phit >= ETA * pred
+                    } else {
+                        phit <= phi
+                    }
+            };
+            let ok = eval(est, st, true);
+            let mut ft = data_cost(est, &est.theta_trial, &st.l_trial);
+            let mut h1t = l1(&st.r_trial, tau);
+            let mut accepted = ok && accept(ft, h1t, st.nu);
+            let mut trial_in_ws = true;
+            if ok && (!accepted || h1t > h1) {
+                // second-order corrections (N&W section 18.3, eq. 18.24), repeated as
+                // chord steps x -= R_x^-1 r(trial) with the factorisation at hand,
+                // when the trial is rejected or worsened the constraint violation:
+                // the linearised constraint hides an O(|step|^2) violation that the
+                // l1 penalty charges (Maratos effect), shrinking the steps for
+                // nothing. Target: the linearised constraint's (1 - alpha) r, so the
+                // actual merit change can match the predicted one (dead zone floor).
+                trial_in_ws = restore(est, st, ((1.0 - alpha) * max_abs(&st.r)).max(tau));
+                ft = data_cost(est, &est.theta_trial, &st.l_trial);
+                h1t = l1(&st.r_trial, tau);
+                accepted = accept(ft, h1t, st.nu);
+            }
+            if accepted {
+                let rho = if pred > 0.0 {
+                    (phi - (ft + st.nu * h1t)) / pred
+                } else {
+                    1.0
+                };
+                if rho > 0.75 {
+                    est.mu = (est.mu / 3.0).max(1e-12);
+                } else if rho < 0.25 {
+                    est.mu *= 2.0;
+                }
+                std::mem::swap(&mut st.x, &mut st.x_trial);
+                std::mem::swap(&mut st.r, &mut st.r_trial);
+                std::mem::swap(&mut est.len, &mut st.l_trial);
+                std::mem::swap(&mut est.theta, &mut est.theta_trial);
+                est.ws.set_theta(&est.theta);
+                est.g_exact = false;
+                ws_current = trial_in_ws;
+                f = ft;
+                h1 = h1t;
+                break;
+            }
+            ws_current = false;
+            est.mu = (est.mu * 4.0).max(1e-6);
+            if est.mu > 1e12 {
+                return conclude(est, st, EstimateStatus::Stalled, ws_current);
+            }
+            if xa > xb {
+                // the Newton correction of x dominates: backtrack along it
+                alpha *= 0.5;
+                if alpha < 1e-6 {
+                    return conclude(est, st, EstimateStatus::Stalled, ws_current);
+                }
+            }
+        }
+    }
+    conclude(est, st, EstimateStatus::MaxIterations, ws_current)
+}
+
+/// Leave the workspace at the returned shape and set `est.len`, `est.cost`.
+/// Converged: the joint iterate (an equilibrium to tolerance). Otherwise: the
+/// equilibrium at the best `theta` by one warm forward solve from the iterate.
+fn conclude(
+    est: &mut Estimator,
+    st: &mut JointState,
+    status: EstimateStatus,
+    ws_current: bool,
+) -> EstimateStatus {
+    est.ws.set_theta(&est.theta);
+    est.ws.adopt_unknowns(&st.x, !ws_current);
+    let status = if status == EstimateStatus::Converged {
+        status
+    } else if est.ws.solve(Start::Warm).status.is_converged() {
+        // the sensitivities were taken off the manifold: not exact at this shape
+        est.g_exact = false;
+        status
+    } else {
+        EstimateStatus::ForwardFailed
+    };
+    est.ws.cable_lengths_into(&mut est.len);
+    est.cost = est.cost_at(false);
+    status
+}
