@@ -44,6 +44,9 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// Multiply by a plain `f64` (cheaper than promoting it to `Self`).
     fn scale(self, k: f64) -> Self;
+    /// Sine and cosine (derivatives `cos x` and `-sin x`); the closed-form arcs of
+    /// the curvature rungs need them.
+    fn sin_cos(self) -> (Self, Self);
 }
 
 impl Real for f64 {
@@ -62,5 +65,9 @@ impl Real for f64 {
     #[inline(always)]
     fn scale(self, k: f64) -> Self {
         self * k
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        f64::sin_cos(self)
     }
 }
