@@ -4,18 +4,18 @@
 //! sensitivities. Allocates per iteration (argmin works on `DVector`/`DMatrix`)
 //! and, as argmin 0.11 inverts `J^T J`, fails on rank loss: reported as `Stalled`.
 
-use super::{EstimateStatus, Estimator};
+use super::{EstimateStatus, EstimationModel, Estimator};
 use crate::nalgebra::{DMatrix, DVector};
 use argmin::core::{CostFunction, Error, Executor, Jacobian, Operator, State};
 use argmin::solver::gaussnewton::GaussNewton;
 use std::cell::RefCell;
 
-struct Nested<'a> {
-    est: RefCell<&'a mut Estimator>,
+struct Nested<'a, M> {
+    est: RefCell<&'a mut Estimator<M>>,
 }
 
-impl Nested<'_> {
-    fn rows(est: &Estimator) -> usize {
+impl<M: EstimationModel> Nested<'_, M> {
+    fn rows(est: &Estimator<M>) -> usize {
         est.c + est.prior_w.iter().filter(|w| **w > 0.0).count()
     }
     fn at(&self, theta: &DVector<f64>) -> Result<(), Error> {
@@ -34,7 +34,7 @@ impl Nested<'_> {
     }
 }
 
-impl Operator for Nested<'_> {
+impl<M: EstimationModel> Operator for Nested<'_, M> {
     type Param = DVector<f64>;
     type Output = DVector<f64>;
     fn apply(&self, theta: &Self::Param) -> Result<Self::Output, Error> {
@@ -57,7 +57,7 @@ impl Operator for Nested<'_> {
     }
 }
 
-impl CostFunction for Nested<'_> {
+impl<M: EstimationModel> CostFunction for Nested<'_, M> {
     type Param = DVector<f64>;
     type Output = f64;
     fn cost(&self, theta: &Self::Param) -> Result<f64, Error> {
@@ -65,7 +65,7 @@ impl CostFunction for Nested<'_> {
     }
 }
 
-impl Jacobian for Nested<'_> {
+impl<M: EstimationModel> Jacobian for Nested<'_, M> {
     type Param = DVector<f64>;
     type Jacobian = DMatrix<f64>;
     fn jacobian(&self, theta: &Self::Param) -> Result<Self::Jacobian, Error> {
@@ -101,7 +101,7 @@ impl Jacobian for Nested<'_> {
 
 /// Run argmin's Gauss-Newton from the current estimate. On failure the previous
 /// estimate and its shape are kept.
-pub(super) fn run(est: &mut Estimator) -> EstimateStatus {
+pub(super) fn run<M: EstimationModel>(est: &mut Estimator<M>) -> EstimateStatus {
     let before = est.theta.clone();
     let status = run_argmin(est);
     if matches!(
@@ -119,7 +119,7 @@ pub(super) fn run(est: &mut Estimator) -> EstimateStatus {
 /// round-off can keep above a tight tolerance; at its iteration limit we therefore
 /// check stationarity ourselves: the Gauss-Newton step at its best point is below
 /// the spec's step tolerance.
-fn stationary(est: &mut Estimator) -> bool {
+fn stationary<M: EstimationModel>(est: &mut Estimator<M>) -> bool {
     est.jac_evals += 1;
     if !est.ws.length_sensitivities(&mut est.g, &mut est.len) {
         return false;
@@ -132,7 +132,7 @@ fn stationary(est: &mut Estimator) -> bool {
     (0..est.p).all(|k| est.step[k].abs() <= est.spec.tolerance * (1.0 + est.theta[k].abs()))
 }
 
-fn run_argmin(est: &mut Estimator) -> EstimateStatus {
+fn run_argmin<M: EstimationModel>(est: &mut Estimator<M>) -> EstimateStatus {
     let theta0 = DVector::from_column_slice(&est.theta);
     let max_iters = est.spec.max_iterations as u64;
     let tol = est.spec.tolerance;

@@ -45,17 +45,20 @@
 mod argmin_gn;
 mod joint;
 mod linalg;
+mod model;
 mod qp;
 mod spec;
 
 pub use joint::JointEstimator;
+pub use model::{DynModel, EstimationModel, RungModel};
 pub use spec::{Axis, EstimateSpec, Method, UnknownKind, UnknownSpec};
 
 use crate::error::ModelError;
-use crate::loads::{Loads, PointLoad};
+use crate::ladder::Rung;
+use crate::loads::Loads;
 use crate::robot::Robot;
 use crate::settings::SolverSettings;
-use crate::statics::{ParamSite, Pose, SolveStatus, Start, Workspace};
+use crate::statics::{Pose, SolveStatus, Start, Workspace};
 use linalg::sym_eigen;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -149,8 +152,13 @@ pub struct Estimate {
 
 /// Estimator: allocate once, then [`Estimator::tick`] per sample without allocating
 /// (methods other than `argmin_gauss_newton` and `constrained`).
-pub struct Estimator {
-    ws: Workspace,
+///
+/// Generic over its forward model ([`EstimationModel`]): the shooting [`Workspace`]
+/// by default ([`Estimator::new`]), or any rung of the model ladder
+/// ([`Estimator::on_rung`], [`Estimator::with_model`]). The methods, bounds, priors,
+/// covariance and statuses are the same on every model.
+pub struct Estimator<M = Workspace> {
+    ws: M,
     spec: EstimateSpec,
     names: Vec<String>,
     p: usize,
@@ -204,42 +212,49 @@ impl Estimator {
     ) -> Result<Self, EstimateError> {
         spec.validate(&robot)?;
         loads.validate(&robot)?;
-        let mut loads = loads;
-        let mut params = Vec::with_capacity(spec.unknowns.len());
-        for u in &spec.unknowns {
-            let site = match u.kind {
-                UnknownKind::Tension => ParamSite::Tension {
-                    cable: u.cable.unwrap_or(0),
-                },
-                kind => {
-                    let section = u.section.unwrap_or(0);
-                    let point = match loads.point.iter().position(|p| p.section == section) {
-                        Some(i) => i,
-                        None => {
-                            loads.point.push(PointLoad {
-                                section,
-                                ..Default::default()
-                            });
-                            loads.point.len() - 1
-                        }
-                    };
-                    let axis = match u.axis {
-                        Some(Axis::X) | None => 0,
-                        Some(Axis::Y) => 1,
-                        Some(Axis::Z) => 2,
-                    };
-                    match kind {
-                        UnknownKind::Force => ParamSite::Force { point, axis },
-                        UnknownKind::Torque => ParamSite::Torque { point, axis },
-                        _ => ParamSite::Mass { point },
-                    }
-                }
-            };
-            params.push(site);
-        }
-        let p = params.len();
-        let c = robot.cables().len();
+        let (loads, params) = model::sites(&spec, loads);
         let ws = Workspace::with_params(robot, loads, settings, &params)?;
+        Self::with_model(ws, spec)
+    }
+
+    /// The forward workspace (current shape).
+    pub fn workspace(&mut self) -> &mut Workspace {
+        &mut self.ws
+    }
+}
+
+impl Estimator<DynModel> {
+    /// Build an estimator on any rung of the model ladder (constant curvature,
+    /// piecewise constant curvature, Kirchhoff or Cosserat rod) under the known
+    /// `loads`; unknowns add to them.
+    pub fn on_rung(
+        robot: Robot,
+        loads: Loads,
+        rung: &Rung,
+        spec: EstimateSpec,
+    ) -> Result<Self, EstimateError> {
+        let model = model::build(robot, loads, rung, &spec)?;
+        Self::with_model(model, spec)
+    }
+}
+
+impl<M: EstimationModel> Estimator<M> {
+    /// Build an estimator on `model`, whose parameters are the spec's unknowns in
+    /// order; computes the reference lengths and solves at the initial values.
+    pub fn with_model(ws: M, spec: EstimateSpec) -> Result<Self, EstimateError> {
+        spec.validate(ws.robot())?;
+        let p = spec.unknowns.len();
+        if ws.params().len() != p {
+            return Err(ModelError::Invalid {
+                field: "estimate.unknowns".into(),
+                why: format!(
+                    "{p} unknowns for a model with {} load parameters",
+                    ws.params().len()
+                ),
+            }
+            .into());
+        }
+        let c = ws.robot().cables().len();
         let names = spec
             .unknowns
             .iter()
@@ -348,8 +363,8 @@ impl Estimator {
     pub fn spec(&self) -> &EstimateSpec {
         &self.spec
     }
-    /// The forward workspace (current shape).
-    pub fn workspace(&mut self) -> &mut Workspace {
+    /// The forward model (current shape).
+    pub fn model(&mut self) -> &mut M {
         &mut self.ws
     }
     /// Tip position of the current estimate (m).
@@ -799,7 +814,7 @@ impl Estimator {
     pub fn estimate(&mut self) -> Estimate {
         self.refresh_statistics();
         let p = self.p;
-        let sol = self.ws.solution();
+        let section_tips = self.ws.section_tips();
         let unobservable = (0..self.n_unobservable)
             .map(|d| Direction {
                 components: (0..p)
@@ -841,8 +856,11 @@ impl Estimator {
             measured_m: measured,
             predicted_m: predicted,
             cost: self.cost,
-            tip: *sol.tip(),
-            section_tips: sol.section_tips,
+            tip: section_tips.last().copied().unwrap_or(Pose {
+                position: self.ws.tip_position(),
+                rotation: crate::nalgebra::Matrix3::identity(),
+            }),
+            section_tips,
             elapsed_s: self.elapsed,
         }
     }

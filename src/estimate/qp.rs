@@ -9,7 +9,7 @@ use clarabel::solver::{
 
 /// Fill `est.step` with the box-constrained step; `false` if clarabel failed (the
 /// caller then falls back to the unconstrained step, which is then projected).
-pub(super) fn box_step(est: &mut Estimator) -> bool {
+pub(super) fn box_step<M>(est: &mut Estimator<M>) -> bool {
     let p = est.p;
     // P: upper triangle of H (+ a tiny ridge so unobservable directions stay bounded)
     let trace: f64 = (0..p).map(|k| est.h[k * p + k]).sum();

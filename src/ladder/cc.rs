@@ -25,14 +25,20 @@
 //! map, accelerated by Anderson mixing (depth 3, mixing parameter `w` = 1, halved
 //! whenever the change grows), until the curvatures change by less than
 //! `tolerance / L`.
+//!
+//! The sweep is generic over [`Real`]: the solver runs it over `f64`, and
+//! [`ConstantCurvature::length_sensitivities`] over dual numbers to differentiate the
+//! fixed point implicitly (module `sens`), which is what the estimator uses.
 
 use super::anderson::Anderson;
-use super::arc::arc_pose;
-use super::{check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
-use crate::cables::path_length;
-use crate::loads::{Frame, Loads};
+use super::arc::{arc_pose_t, PoseT};
+use super::sens::{scatter, seed_theta, seed_u, Implicit, LoadsT, D6, W};
+use super::{add_params, check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
+use crate::cables::{path_length, path_length_t};
+use crate::loads::Loads;
+use crate::math::Real;
 use crate::robot::Robot;
-use crate::statics::{Pose, SolveStatus, Start};
+use crate::statics::{ParamSite, Pose, SolveStatus, Start};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -78,37 +84,139 @@ impl CcSettings {
     }
 }
 
-/// A resolved point load: section, force/torque as given, frame, payload weight.
-#[derive(Clone, Copy, Debug)]
-struct Point {
-    section: usize,
-    force: Vector3<f64>,
-    torque: Vector3<f64>,
-    body: bool,
-    weight: Vector3<f64>,
+/// What never changes: the robot and its cable geometry.
+struct Layout {
+    robot: Robot,
+    /// `e3 x d_jk`: moment arm (local) of cable `j` on section `k`, `[j][k]`.
+    arms: Vec<Vec<Vector3<f64>>>,
+    /// Base-plate holes (world).
+    base_holes: Vec<Vector3<f64>>,
+}
+
+/// The state a sweep reads and writes, over `f64` (solver) or dual numbers
+/// (sensitivities).
+#[derive(Clone, Debug)]
+struct Buf<T: Real> {
+    u: Vec<Vector3<T>>,
+    u_new: Vec<Vector3<T>>,
+    /// Start pose of each section; the last entry is the tip.
+    starts: Vec<PoseT<T>>,
+    ends: Vec<PoseT<T>>,
+    guides: Vec<PoseT<T>>,
+    hole_pts: Vec<Vec<Vector3<T>>>,
+    loads: LoadsT<T>,
+}
+
+impl<T: Real> Buf<T> {
+    fn new(robot: &Robot) -> Self {
+        let ns = robot.sections().len();
+        let base = PoseT::constant(&base_pose(robot));
+        Self {
+            u: robot
+                .sections()
+                .iter()
+                .map(|s| s.precurvature.map(T::cst))
+                .collect(),
+            u_new: vec![Vector3::zeros(); ns],
+            starts: vec![base; ns + 1],
+            ends: vec![base; ns],
+            guides: vec![base; robot.guides().len()],
+            hole_pts: robot
+                .cables()
+                .iter()
+                .map(|c| vec![Vector3::zeros(); c.route.len()])
+                .collect(),
+            loads: LoadsT::new(robot.cables().len()),
+        }
+    }
+}
+
+impl Layout {
+    /// One Gauss-Seidel sweep `u -> u_new` (sections before `k` already updated when
+    /// section `k` is computed); returns the largest change times `L`.
+    fn sweep<T: Real>(&self, b: &mut Buf<T>) -> f64 {
+        let secs = self.robot.sections();
+        let ns = secs.len();
+        let mut pose = PoseT::constant(&base_pose(&self.robot));
+        let g = b.loads.gravity;
+        let mut change: f64 = 0.0;
+        for k in 0..ns {
+            b.starts[k] = pose;
+            let rt = pose.rotation.transpose();
+            // cable moments, local: T (e3 x d)
+            let mut m_loc = Vector3::<T>::zeros();
+            for (j, c) in self.robot.cables().iter().enumerate() {
+                let t = b.loads.tensions[j];
+                if c.end_section >= k && t != T::zero() {
+                    m_loc += self.arms[j][k].map(|a| t.scale(a));
+                }
+            }
+            // loads at section ends j >= k, on the current shape (old u for j >= k)
+            let mid = arc_pose_t(&pose, &b.u[k], 0.5 * secs[k].length);
+            let mut q = pose;
+            for (j, sec) in secs.iter().enumerate().skip(k) {
+                q = arc_pose_t(&q, &b.u[j], sec.length);
+                b.ends[j] = q;
+            }
+            let mut m_w = Vector3::<T>::zeros();
+            for p in b.loads.points.iter().filter(|p| p.section >= k) {
+                let e = &b.ends[p.section];
+                let (f, tau) = if p.body {
+                    (e.rotation * p.force, e.rotation * p.torque)
+                } else {
+                    (p.force, p.torque)
+                };
+                let weight = g.map(|x| p.mass.scale(x));
+                m_w += tau + (e.position - mid.position).cross(&(f + weight));
+            }
+            m_loc += rt * m_w;
+            let stiff = &secs[k].stiffness.bend_twist;
+            let pre = &secs[k].precurvature;
+            let u_new = Vector3::from_fn(|i, _| m_loc[i].scale(1.0 / stiff[i]) + T::cst(pre[i]));
+            for i in 0..3 {
+                change = change.max((u_new[i].re() - b.u[k][i].re()).abs());
+            }
+            b.u_new[k] = u_new;
+            pose = arc_pose_t(&pose, &u_new, secs[k].length);
+        }
+        b.starts[ns] = pose;
+        change * self.robot.length()
+    }
+
+    /// Section starts, guide poses and cable hole points from `u` alone.
+    fn shape<T: Real>(&self, b: &mut Buf<T>) {
+        let secs = self.robot.sections();
+        let mut pose = PoseT::constant(&base_pose(&self.robot));
+        for (k, sec) in secs.iter().enumerate() {
+            b.starts[k] = pose;
+            pose = arc_pose_t(&pose, &b.u[k], sec.length);
+        }
+        b.starts[secs.len()] = pose;
+        for (g, guide) in self.robot.guides().iter().enumerate() {
+            let k = guide.section;
+            b.guides[g] = arc_pose_t(&b.starts[k], &b.u[k], guide.s - secs[k].start);
+        }
+        for (j, c) in self.robot.cables().iter().enumerate() {
+            for (i, &g) in c.route.iter().enumerate() {
+                let pose = &b.guides[g];
+                let hole = self.robot.guides()[g].holes[c.hole].map(T::cst);
+                b.hole_pts[j][i] = pose.position + pose.rotation * hole;
+            }
+        }
+    }
 }
 
 /// Constant curvature per section (module docs).
 pub struct ConstantCurvature {
-    robot: Robot,
+    layout: Layout,
     settings: CcSettings,
-    /// Local hole vector of cable `j` on section `k`'s disks, `[j][k]`.
-    holes: Vec<Vec<Vector3<f64>>>,
-    /// Base-plate holes (world).
-    base_holes: Vec<Vector3<f64>>,
-    u: Vec<Vector3<f64>>,
-    u_new: Vec<Vector3<f64>>,
+    b: Buf<f64>,
     f: Vec<Vector3<f64>>,
     anderson: Anderson,
-    tensions: Vec<f64>,
-    /// Start pose of each section; the last entry is the tip.
-    starts: Vec<Pose>,
-    guides: Vec<Pose>,
-    hole_pts: Vec<Vec<Vector3<f64>>>,
     lengths: Vec<f64>,
-    points: Vec<Point>,
-    ends: Vec<Pose>,
     report: LadderReport,
+    /// Sensitivity buffers, built by the first [`ConstantCurvature::length_sensitivities`].
+    sens: Option<(Buf<D6>, Implicit)>,
 }
 
 impl ConstantCurvature {
@@ -116,7 +224,7 @@ impl ConstantCurvature {
     pub fn new(robot: Robot, settings: CcSettings) -> Result<Self, LadderError> {
         settings.validate()?;
         let ns = robot.sections().len();
-        let holes = robot
+        let arms = robot
             .cables()
             .iter()
             .map(|c| {
@@ -130,10 +238,11 @@ impl ConstantCurvature {
                             .iter()
                             .rev()
                             .find(|&&g| robot.guides()[g].section < k);
-                        match on.or(before) {
+                        let d = match on.or(before) {
                             Some(&g) => robot.guides()[g].holes[c.hole],
                             None => c.base_hole,
-                        }
+                        };
+                        Vector3::z().cross(&d)
                     })
                     .collect()
             })
@@ -143,101 +252,156 @@ impl ConstantCurvature {
             .iter()
             .map(|c| robot.base_position() + robot.base_rotation() * c.base_hole)
             .collect();
-        let hole_pts = robot
-            .cables()
-            .iter()
-            .map(|c| vec![Vector3::zeros(); c.route.len()])
-            .collect();
-        let base = base_pose(&robot);
         Ok(Self {
-            u: robot.sections().iter().map(|s| s.precurvature).collect(),
-            u_new: vec![Vector3::zeros(); ns],
+            b: Buf::new(&robot),
             f: vec![Vector3::zeros(); ns],
             anderson: Anderson::new(3, ns),
-            tensions: vec![0.0; robot.cables().len()],
-            starts: vec![base; ns + 1],
-            ends: vec![base; ns],
-            guides: vec![base; robot.guides().len()],
             lengths: vec![0.0; robot.cables().len()],
-            hole_pts,
-            holes,
-            base_holes,
-            points: Vec::new(),
             report: LadderReport {
                 status: SolveStatus::NonFinite,
                 iterations: 0,
                 residual: f64::INFINITY,
             },
-            robot,
+            sens: None,
+            layout: Layout {
+                robot,
+                arms,
+                base_holes,
+            },
             settings,
         })
     }
 
     /// Curvature of each section (1/m, local) from the last solve.
     pub fn curvatures(&self) -> &[Vector3<f64>] {
-        &self.u
-    }
-
-    /// One Gauss-Seidel sweep `u -> u_new` (sections before `k` already updated when
-    /// section `k` is computed); returns the largest change times `L`.
-    fn sweep(&mut self) -> f64 {
-        let secs = self.robot.sections();
-        let ns = secs.len();
-        let mut pose = base_pose(&self.robot);
-        let mut change: f64 = 0.0;
-        for k in 0..ns {
-            self.starts[k] = pose;
-            let rt = pose.rotation.transpose();
-            // cable moments, local: T (e3 x d)
-            let mut m_loc = Vector3::zeros();
-            for (j, c) in self.robot.cables().iter().enumerate() {
-                let t = self.tensions.get(j).copied().unwrap_or(0.0);
-                if t > 0.0 && c.end_section >= k {
-                    m_loc += Vector3::z().cross(&self.holes[j][k]) * t;
-                }
-            }
-            // loads at section ends j >= k, on the current shape (old u for j >= k)
-            let mid = arc_pose(&pose, &self.u[k], 0.5 * secs[k].length);
-            let mut q = pose;
-            for (j, sec) in secs.iter().enumerate().skip(k) {
-                q = arc_pose(&q, &self.u[j], sec.length);
-                self.ends[j] = q;
-            }
-            let mut m_w = Vector3::zeros();
-            for p in self.points.iter().filter(|p| p.section >= k) {
-                let e = &self.ends[p.section];
-                let (f, tau) = if p.body {
-                    (e.rotation * p.force, e.rotation * p.torque)
-                } else {
-                    (p.force, p.torque)
-                };
-                m_w += tau + (e.position - mid.position).cross(&(f + p.weight));
-            }
-            m_loc += rt * m_w;
-            let stiff = &secs[k].stiffness.bend_twist;
-            let u_new = m_loc.component_div(stiff) + secs[k].precurvature;
-            change = change.max((u_new - self.u[k]).amax());
-            self.u_new[k] = u_new;
-            pose = arc_pose(&pose, &u_new, secs[k].length);
-        }
-        self.starts[ns] = pose;
-        change * self.robot.length()
+        &self.b.u
     }
 
     fn finish(&mut self) {
-        let secs = self.robot.sections();
-        for (g, guide) in self.robot.guides().iter().enumerate() {
-            let k = guide.section;
-            self.guides[g] = arc_pose(&self.starts[k], &self.u[k], guide.s - secs[k].start);
+        self.layout.shape(&mut self.b);
+        for (j, l) in self.lengths.iter_mut().enumerate() {
+            *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
         }
-        for (j, c) in self.robot.cables().iter().enumerate() {
-            for (i, &g) in c.route.iter().enumerate() {
-                let pose = &self.guides[g];
-                self.hole_pts[j][i] =
-                    pose.position + pose.rotation * self.robot.guides()[g].holes[c.hole];
+    }
+
+    /// [`ForwardModel::solve`] for `loads` plus `theta_k` at `params[k]` (see
+    /// [`super::Differentiable::solve_params`]).
+    pub fn solve_params(
+        &mut self,
+        loads: &Loads,
+        params: &[ParamSite],
+        theta: &[f64],
+        start: Start,
+    ) -> Result<LadderReport, LadderError> {
+        check_loads(&self.layout.robot, loads)?;
+        self.b.loads.set(loads);
+        add_params(&mut self.b.loads, params, theta)?;
+        Ok(self.run(start))
+    }
+
+    /// The solve proper, on the loads already in `self.b.loads`.
+    fn run(&mut self, start: Start) -> LadderReport {
+        let g = self.b.loads.gravity;
+        let shape_dependent = self.b.loads.points.iter().any(|p| {
+            p.force != Vector3::zeros()
+                || (p.mass != 0.0 && g != Vector3::zeros())
+                || (p.body && p.torque != Vector3::zeros())
+        });
+        if start == Start::Cold || !self.report.status.is_converged() {
+            for (u, s) in self.b.u.iter_mut().zip(self.layout.robot.sections()) {
+                *u = s.precurvature;
             }
-            self.lengths[j] = path_length(&self.base_holes[j], &self.hole_pts[j]);
         }
+        let mut status = SolveStatus::MaxIterations;
+        let mut iterations = 0;
+        let mut residual = f64::INFINITY;
+        let mut w: f64 = 1.0;
+        let mut last = f64::INFINITY;
+        self.anderson.reset();
+        while iterations < self.settings.max_iterations {
+            residual = self.layout.sweep(&mut self.b);
+            iterations += 1;
+            if !residual.is_finite() {
+                status = SolveStatus::NonFinite;
+                break;
+            }
+            if !shape_dependent || residual <= self.settings.tolerance {
+                self.b.u.copy_from_slice(&self.b.u_new);
+                status = SolveStatus::Converged;
+                break;
+            }
+            if residual > last {
+                // the plain fixed point oscillates under heavy forces: damp it
+                w = (w * 0.5).max(1.0 / 256.0);
+                self.anderson.reset();
+            }
+            last = residual;
+            for (f, (un, u)) in self.f.iter_mut().zip(self.b.u_new.iter().zip(&self.b.u)) {
+                *f = un - u;
+            }
+            self.anderson.step(&mut self.b.u, &self.f, w);
+        }
+        if status != SolveStatus::Converged {
+            // poses below come from the last iterate
+            self.layout.sweep(&mut self.b);
+            self.b.u.copy_from_slice(&self.b.u_new);
+        }
+        if !shape_dependent {
+            residual = 0.0;
+        }
+        self.finish();
+        self.report = LadderReport {
+            status,
+            iterations,
+            residual,
+        };
+        self.report
+    }
+
+    /// Exact sensitivities `d l_j / d theta_k` of the cable lengths to load
+    /// parameters at the last solve's loads and shape, by implicit differentiation of
+    /// the fixed point (module `sens`): row-major `c x p` into `out`, the lengths into
+    /// `lengths`. Force and torque sites must be world-frame point loads. Allocates
+    /// on the first call only. `false` when the last solve did not converge, a site
+    /// is invalid, or `I - Phi_u` is singular.
+    pub fn length_sensitivities(
+        &mut self,
+        params: &[ParamSite],
+        out: &mut [f64],
+        lengths: &mut [f64],
+    ) -> bool {
+        let (n, p, c) = (3 * self.b.u.len(), params.len(), self.lengths.len());
+        if !self.report.status.is_converged() || out.len() < c * p {
+            return false;
+        }
+        if !matches!(&self.sens, Some((_, imp)) if imp.p == p) {
+            self.sens = Some((Buf::new(&self.layout.robot), Implicit::new(n, p, c)));
+        }
+        let Some((bd, imp)) = &mut self.sens else {
+            return false;
+        };
+        let w = imp.width();
+        for c0 in (0..w).step_by(W) {
+            seed_u(&self.b.u, &mut bd.u, c0);
+            if !seed_theta(&self.b.loads, &mut bd.loads, params, n, c0) {
+                return false;
+            }
+            self.layout.sweep(bd);
+            for (i, u) in bd.u_new.iter().enumerate() {
+                for a in 0..3 {
+                    scatter(&mut imp.phi, w, 3 * i + a, &u[a], c0);
+                }
+            }
+            self.layout.shape(bd);
+            for (j, pts) in bd.hole_pts.iter().enumerate() {
+                let base = self.layout.base_holes[j].map(D6::constant);
+                scatter(&mut imp.len, w, j, &path_length_t(&base, pts), c0);
+            }
+        }
+        for (l, v) in lengths.iter_mut().zip(&self.lengths) {
+            *l = *v;
+        }
+        imp.solve(out)
     }
 }
 
@@ -250,77 +414,13 @@ fn base_pose(robot: &Robot) -> Pose {
 
 impl ForwardModel for ConstantCurvature {
     fn solve(&mut self, loads: &Loads, start: Start) -> Result<LadderReport, LadderError> {
-        check_loads(&self.robot, loads)?;
-        let g = Vector3::from(loads.gravity_m_s2);
-        for (j, t) in self.tensions.iter_mut().enumerate() {
-            *t = loads.tension(j);
-        }
-        self.points.clear();
-        self.points.extend(loads.point.iter().map(|p| Point {
-            section: p.section,
-            force: Vector3::from(p.force_n),
-            torque: Vector3::from(p.torque_nm),
-            body: p.frame == Frame::Body,
-            weight: g * p.mass_kg,
-        }));
-        let shape_dependent = self.points.iter().any(|p| {
-            p.force != Vector3::zeros()
-                || p.weight != Vector3::zeros()
-                || (p.body && p.torque != Vector3::zeros())
-        });
-        if start == Start::Cold || !self.report.status.is_converged() {
-            for (u, s) in self.u.iter_mut().zip(self.robot.sections()) {
-                *u = s.precurvature;
-            }
-        }
-        let mut status = SolveStatus::MaxIterations;
-        let mut iterations = 0;
-        let mut residual = f64::INFINITY;
-        let mut w: f64 = 1.0;
-        let mut last = f64::INFINITY;
-        self.anderson.reset();
-        while iterations < self.settings.max_iterations {
-            residual = self.sweep();
-            iterations += 1;
-            if !residual.is_finite() {
-                status = SolveStatus::NonFinite;
-                break;
-            }
-            if !shape_dependent || residual <= self.settings.tolerance {
-                self.u.copy_from_slice(&self.u_new);
-                status = SolveStatus::Converged;
-                break;
-            }
-            if residual > last {
-                // the plain fixed point oscillates under heavy forces: damp it
-                w = (w * 0.5).max(1.0 / 256.0);
-                self.anderson.reset();
-            }
-            last = residual;
-            for (f, (un, u)) in self.f.iter_mut().zip(self.u_new.iter().zip(&self.u)) {
-                *f = un - u;
-            }
-            self.anderson.step(&mut self.u, &self.f, w);
-        }
-        if status != SolveStatus::Converged {
-            // poses below come from the last iterate
-            self.sweep();
-            self.u.copy_from_slice(&self.u_new);
-        }
-        if !shape_dependent {
-            residual = 0.0;
-        }
-        self.finish();
-        self.report = LadderReport {
-            status,
-            iterations,
-            residual,
-        };
-        Ok(self.report)
+        check_loads(&self.layout.robot, loads)?;
+        self.b.loads.set(loads);
+        Ok(self.run(start))
     }
 
     fn tip_position(&self) -> Vector3<f64> {
-        self.starts[self.starts.len() - 1].position
+        self.b.starts[self.b.starts.len() - 1].position
     }
 
     fn cable_lengths_into(&self, out: &mut [f64]) {
@@ -332,13 +432,13 @@ impl ForwardModel for ConstantCurvature {
     fn output(&mut self) -> LadderOutput {
         LadderOutput {
             report: self.report,
-            section_tips: self.starts[1..].to_vec(),
-            guides: self.guides.clone(),
+            section_tips: self.b.starts[1..].iter().map(PoseT::pose).collect(),
+            guides: self.b.guides.iter().map(PoseT::pose).collect(),
             cable_lengths: self.lengths.clone(),
         }
     }
 
     fn robot(&self) -> &Robot {
-        &self.robot
+        &self.layout.robot
     }
 }

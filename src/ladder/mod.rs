@@ -11,10 +11,11 @@
 //!
 //! Every rung answers the same question through [`ForwardModel`]: loads in, tip and
 //! section-end poses, guide poses and cable lengths out (cable lengths always from the
-//! guide transforms of thesis 3.8.1, [`crate::cables::path_length`]). Rod rungs expose
-//! their [`SolverSettings`] ([`Rung::solver_settings`]) so that the estimator
-//! ([`crate::estimate::Estimator`]) can run on them; the two curvature rungs are
-//! forward-only.
+//! guide transforms of thesis 3.8.1, [`crate::cables::path_length`]). Every rung can
+//! also sit under the estimator ([`crate::estimate::Estimator::on_rung`]): rod rungs
+//! through their [`SolverSettings`] ([`Rung::solver_settings`]) and the shooting
+//! workspace, the curvature rungs through [`Differentiable`], their exact cable-length
+//! sensitivities by implicit differentiation of their fixed points.
 
 mod anderson;
 mod arc;
@@ -22,6 +23,7 @@ mod auto;
 mod cc;
 mod pcc;
 mod rod;
+mod sens;
 
 pub use arc::{arc_pose, ArcJacobian};
 pub use auto::{
@@ -35,7 +37,7 @@ use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::robot::Robot;
 use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
-use crate::statics::{Pose, SolveStatus, Start};
+use crate::statics::{ParamSite, Pose, SolveStatus, Start};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -114,6 +116,73 @@ pub trait ForwardModel {
     fn robot(&self) -> &Robot;
 }
 
+/// A curvature rung whose cable lengths can be differentiated with respect to load
+/// parameters (what the estimator needs besides [`ForwardModel`]).
+pub trait Differentiable: ForwardModel {
+    /// [`ForwardModel::solve`] for `loads` plus `theta_k` at `params[k]` (no
+    /// allocation after the first call). `loads` is validated; the parameter values
+    /// are not sign-checked (see the estimator's trial steps). Error on an invalid
+    /// site (index out of range, force/torque on a body-frame point load).
+    fn solve_params(
+        &mut self,
+        loads: &Loads,
+        params: &[ParamSite],
+        theta: &[f64],
+        start: Start,
+    ) -> Result<LadderReport, LadderError>;
+    /// Exact `d l_j / d theta_k` at the last solve's loads and shape, row-major
+    /// `c x p` into `out` (`theta_k` adds at `params[k]`, as for the shooting
+    /// workspace; force and torque sites must be world-frame point loads), the
+    /// lengths into `lengths`. No allocation after the first call. `false` when the
+    /// last solve did not converge or the derivative does not exist there.
+    fn length_sensitivities(
+        &mut self,
+        params: &[ParamSite],
+        out: &mut [f64],
+        lengths: &mut [f64],
+    ) -> bool;
+}
+
+impl Differentiable for ConstantCurvature {
+    fn solve_params(
+        &mut self,
+        loads: &Loads,
+        params: &[ParamSite],
+        theta: &[f64],
+        start: Start,
+    ) -> Result<LadderReport, LadderError> {
+        ConstantCurvature::solve_params(self, loads, params, theta, start)
+    }
+    fn length_sensitivities(
+        &mut self,
+        params: &[ParamSite],
+        out: &mut [f64],
+        lengths: &mut [f64],
+    ) -> bool {
+        ConstantCurvature::length_sensitivities(self, params, out, lengths)
+    }
+}
+
+impl Differentiable for PiecewiseConstantCurvature {
+    fn solve_params(
+        &mut self,
+        loads: &Loads,
+        params: &[ParamSite],
+        theta: &[f64],
+        start: Start,
+    ) -> Result<LadderReport, LadderError> {
+        PiecewiseConstantCurvature::solve_params(self, loads, params, theta, start)
+    }
+    fn length_sensitivities(
+        &mut self,
+        params: &[ParamSite],
+        out: &mut [f64],
+        lengths: &mut [f64],
+    ) -> bool {
+        PiecewiseConstantCurvature::length_sensitivities(self, params, out, lengths)
+    }
+}
+
 /// A rung and its settings: a plain, serializable description.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -178,7 +247,7 @@ impl Rung {
         }
     }
 
-    /// Settings an estimator can run on (rod rungs only).
+    /// The shooting settings of a rod rung (`None` for the curvature rungs).
     pub fn solver_settings(&self) -> Option<&SolverSettings> {
         match self {
             Self::Rod(s) => Some(s),
@@ -296,6 +365,23 @@ pub fn auto_ladder(robot: &Robot) -> Vec<Rung> {
         }
     }
     out
+}
+
+/// Load parameters added to resolved loads, or the site that is invalid.
+pub(crate) fn add_params(
+    out: &mut sens::LoadsT<f64>,
+    params: &[ParamSite],
+    theta: &[f64],
+) -> Result<(), LadderError> {
+    for (k, (site, v)) in params.iter().zip(theta).enumerate() {
+        if !out.add_at(site, *v) {
+            return Err(LadderError::Model(ModelError::Invalid {
+                field: format!("load parameter {k}"),
+                why: format!("{site:?} is not a cable or a world-frame point load"),
+            }));
+        }
+    }
+    Ok(())
 }
 
 /// Validate `loads` against `robot` cheaply on the hot path: the allocating

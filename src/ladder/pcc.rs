@@ -31,15 +31,21 @@
 //! each step warm-started from the last and solved only to 1e-4 (load continuation). Gravity on rod and disks, point
 //! loads, body-frame loads and cable chords are all modelled; shear and extension are
 //! not (a Kirchhoff rod discretised by the midpoint rule).
+//!
+//! Steps 1-3 are generic over [`Real`]: the solver runs them over `f64`, and
+//! [`PiecewiseConstantCurvature::length_sensitivities`] over dual numbers to
+//! differentiate the converged fixed point implicitly (module `sens`).
 
 use super::anderson::{Anderson, MAX_DEPTH};
-use super::arc::arc_pose;
-use super::{check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
-use crate::cables::path_length;
-use crate::loads::{Frame, Loads};
+use super::arc::{arc_pose_t, PoseT};
+use super::sens::{scatter, seed_theta, seed_u, unit_t, Implicit, LoadsT, D6, W};
+use super::{add_params, check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
+use crate::cables::{path_length, path_length_t};
+use crate::loads::Loads;
+use crate::math::Real;
 use crate::robot::Robot;
 use crate::settings::GuideMass;
-use crate::statics::{Pose, SolveStatus, Start};
+use crate::statics::{ParamSite, Pose, SolveStatus, Start};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -125,10 +131,10 @@ struct Piece {
     lambda: f64,
 }
 
-/// Piecewise constant curvature (module docs).
-pub struct PiecewiseConstantCurvature {
+/// What never changes: the robot, its pieces and where loads act.
+struct Layout {
     robot: Robot,
-    settings: PccSettings,
+    guide_mass: GuideMass,
     pieces: Vec<Piece>,
     /// Marks at boundary `i` (boundary 0 is the base): `marks[mark_at[i]..mark_at[i+1]]`.
     marks: Vec<Mark>,
@@ -138,17 +144,61 @@ pub struct PiecewiseConstantCurvature {
     /// `(cable, route position)` of each guide.
     guide_cables: Vec<Vec<(usize, usize)>>,
     base_holes: Vec<Vector3<f64>>,
-    u: Vec<Vector3<f64>>,
-    u_new: Vec<Vector3<f64>>,
+    section_ends: Vec<usize>,
+}
+
+/// The state a sweep reads and writes, over `f64` (solver) or dual numbers
+/// (sensitivities).
+#[derive(Clone, Debug)]
+struct Buf<T: Real> {
+    u: Vec<Vector3<T>>,
+    u_new: Vec<Vector3<T>>,
+    bound: Vec<PoseT<T>>,
+    mid: Vec<PoseT<T>>,
+    quarter: Vec<Vector3<T>>,
+    hole_pts: Vec<Vec<Vector3<T>>>,
+    loads: LoadsT<T>,
+}
+
+impl<T: Real> Buf<T> {
+    fn new(l: &Layout) -> Self {
+        let np = l.pieces.len();
+        let base = PoseT::constant(&Pose {
+            position: *l.robot.base_position(),
+            rotation: *l.robot.base_rotation(),
+        });
+        Self {
+            u: l.pieces
+                .iter()
+                .map(|p| l.robot.sections()[p.section].precurvature.map(T::cst))
+                .collect(),
+            u_new: vec![Vector3::zeros(); np],
+            bound: vec![base; np + 1],
+            mid: vec![base; np],
+            quarter: vec![Vector3::zeros(); np],
+            hole_pts: l
+                .robot
+                .cables()
+                .iter()
+                .map(|c| vec![Vector3::zeros(); c.route.len()])
+                .collect(),
+            loads: LoadsT::new(l.robot.cables().len()),
+        }
+    }
+}
+
+/// Piecewise constant curvature (module docs).
+pub struct PiecewiseConstantCurvature {
+    layout: Layout,
+    settings: PccSettings,
+    b: Buf<f64>,
     f: Vec<Vector3<f64>>,
     anderson: Anderson,
-    bound: Vec<Pose>,
-    mid: Vec<Pose>,
-    quarter: Vec<Vector3<f64>>,
-    hole_pts: Vec<Vec<Vector3<f64>>>,
     lengths: Vec<f64>,
-    section_ends: Vec<usize>,
     report: LadderReport,
+    /// Sensitivity buffers, built by the first
+    /// [`PiecewiseConstantCurvature::length_sensitivities`].
+    sens: Option<(Buf<D6>, Implicit)>,
 }
 
 impl PiecewiseConstantCurvature {
@@ -246,44 +296,33 @@ impl PiecewiseConstantCurvature {
             }
         }
         let np = pieces.len();
-        let base = Pose {
-            position: *robot.base_position(),
-            rotation: *robot.base_rotation(),
-        };
-        Ok(Self {
-            u: pieces
-                .iter()
-                .map(|p| robot.sections()[p.section].precurvature)
-                .collect(),
-            u_new: vec![Vector3::zeros(); np],
-            f: vec![Vector3::zeros(); np],
-            anderson: Anderson::new(settings.anderson_depth, np),
-            bound: vec![base; np + 1],
-            mid: vec![base; np],
-            quarter: vec![Vector3::zeros(); np],
-            hole_pts: robot
-                .cables()
-                .iter()
-                .map(|c| vec![Vector3::zeros(); c.route.len()])
-                .collect(),
-            lengths: vec![0.0; robot.cables().len()],
+        let layout = Layout {
             base_holes: robot
                 .cables()
                 .iter()
                 .map(|c| robot.base_position() + robot.base_rotation() * c.base_hole)
                 .collect(),
+            guide_mass: settings.guide_mass,
             pieces,
             marks: ordered,
             mark_at: at,
             guide_boundary,
             guide_cables,
             section_ends,
+            robot,
+        };
+        Ok(Self {
+            b: Buf::new(&layout),
+            f: vec![Vector3::zeros(); np],
+            anderson: Anderson::new(settings.anderson_depth, np),
+            lengths: vec![0.0; layout.robot.cables().len()],
             report: LadderReport {
                 status: SolveStatus::NonFinite,
                 iterations: 0,
                 residual: f64::INFINITY,
             },
-            robot,
+            sens: None,
+            layout,
             settings,
         })
     }
@@ -292,7 +331,6 @@ impl PiecewiseConstantCurvature {
     /// curvatures, at most `budget` sweeps (counted into `iterations`).
     fn iterate(
         &mut self,
-        loads: &Loads,
         lam: f64,
         budget: usize,
         tol: f64,
@@ -303,8 +341,8 @@ impl PiecewiseConstantCurvature {
         let mut last = f64::INFINITY;
         let mut residual = f64::INFINITY;
         for _ in 0..budget {
-            self.kinematics();
-            residual = self.moments(loads, lam);
+            self.layout.kinematics(&mut self.b);
+            residual = self.layout.moments(&mut self.b, lam);
             *iterations += 1;
             if !residual.is_finite() {
                 return (SolveStatus::NonFinite, residual);
@@ -317,13 +355,13 @@ impl PiecewiseConstantCurvature {
                 self.anderson.reset();
             }
             last = residual;
-            for (f, (un, u)) in self.f.iter_mut().zip(self.u_new.iter().zip(&self.u)) {
+            for (f, (un, u)) in self.f.iter_mut().zip(self.b.u_new.iter().zip(&self.b.u)) {
                 *f = un - u;
             }
             if self.settings.anderson_depth > 0 {
-                self.anderson.step(&mut self.u, &self.f, w);
+                self.anderson.step(&mut self.b.u, &self.f, w);
             } else {
-                for (u, f) in self.u.iter_mut().zip(&self.f) {
+                for (u, f) in self.b.u.iter_mut().zip(&self.f) {
                     *u += f * w;
                 }
             }
@@ -333,121 +371,32 @@ impl PiecewiseConstantCurvature {
 
     /// Number of pieces.
     pub fn pieces(&self) -> usize {
-        self.pieces.len()
-    }
-
-    /// Step 1 of a sweep: poses and holes from `self.u`.
-    fn kinematics(&mut self) {
-        for (i, p) in self.pieces.iter().enumerate() {
-            let b = self.bound[i];
-            self.mid[i] = arc_pose(&b, &self.u[i], 0.5 * p.h);
-            self.quarter[i] = arc_pose(&b, &self.u[i], 0.75 * p.h).position;
-            self.bound[i + 1] = arc_pose(&b, &self.u[i], p.h);
-        }
-        for (j, c) in self.robot.cables().iter().enumerate() {
-            for (k, &g) in c.route.iter().enumerate() {
-                let pose = &self.bound[self.guide_boundary[g]];
-                self.hole_pts[j][k] =
-                    pose.position + pose.rotation * self.robot.guides()[g].holes[c.hole];
-            }
-        }
-    }
-
-    /// Steps 2-3: new curvatures into `u_new`; returns the largest change times `L`.
-    fn moments(&mut self, loads: &Loads, lam: f64) -> f64 {
-        let g = Vector3::from(loads.gravity_m_s2) * lam;
-        let secs = self.robot.sections();
-        let mut n = Vector3::zeros();
-        let mut m = Vector3::zeros();
-        let mut change: f64 = 0.0;
-        for i in (0..self.pieces.len()).rev() {
-            let b = i + 1;
-            let rb = self.bound[b].position;
-            // loads at boundary b (distal end of piece i); m is about rb
-            for mark in &self.marks[self.mark_at[b]..self.mark_at[b + 1]] {
-                match *mark {
-                    Mark::SectionEnd(k) => {
-                        for p in loads.point.iter().filter(|p| p.section == k) {
-                            let rot = &self.bound[b].rotation;
-                            let (f, t) = if p.frame == Frame::Body {
-                                (
-                                    rot * Vector3::from(p.force_n),
-                                    rot * Vector3::from(p.torque_nm),
-                                )
-                            } else {
-                                (Vector3::from(p.force_n), Vector3::from(p.torque_nm))
-                            };
-                            n += f * lam + g * p.mass_kg;
-                            m += t * lam;
-                        }
-                    }
-                    Mark::Guide(gi) => {
-                        if self.settings.guide_mass == GuideMass::Point {
-                            n += g * self.robot.guides()[gi].mass;
-                        }
-                        for &(j, k) in &self.guide_cables[gi] {
-                            let t = loads.tension(j) * lam;
-                            if t <= 0.0 {
-                                continue;
-                            }
-                            let pts = &self.hole_pts[j];
-                            let p = pts[k];
-                            let prev = if k == 0 {
-                                self.base_holes[j]
-                            } else {
-                                pts[k - 1]
-                            };
-                            let mut f = unit(prev - p) * t;
-                            if k + 1 < pts.len() {
-                                f += unit(pts[k + 1] - p) * t;
-                            }
-                            n += f;
-                            m += (p - rb).cross(&f);
-                        }
-                    }
-                }
-            }
-            let piece = self.pieces[i];
-            let w = g * (piece.lambda * piece.h);
-            let ra = self.bound[i].position;
-            let rm = self.mid[i].position;
-            // midpoint moment: transport from rb plus the distal half's weight
-            let c_half = (rm + self.quarter[i] * 4.0 + rb) / 6.0;
-            let m_mid = m + (rb - rm).cross(&n) + (c_half - rm).cross(&(w * 0.5));
-            let sec = &secs[piece.section];
-            let u = (self.mid[i].rotation.transpose() * m_mid)
-                .component_div(&sec.stiffness.bend_twist)
-                + sec.precurvature;
-            change = change.max((u - self.u[i]).amax());
-            self.u_new[i] = u;
-            // transport (n, m) to the piece's start
-            let c = (ra + rm * 4.0 + rb) / 6.0;
-            m += (rb - ra).cross(&n) + (c - ra).cross(&w);
-            n += w;
-        }
-        change * self.robot.length()
+        self.layout.pieces.len()
     }
 
     fn reset(&mut self) {
-        for (u, p) in self.u.iter_mut().zip(&self.pieces) {
-            *u = self.robot.sections()[p.section].precurvature;
+        for (u, p) in self.b.u.iter_mut().zip(&self.layout.pieces) {
+            *u = self.layout.robot.sections()[p.section].precurvature;
         }
     }
-}
 
-#[inline]
-fn unit(a: Vector3<f64>) -> Vector3<f64> {
-    let n = a.norm();
-    if n > 0.0 {
-        a / n
-    } else {
-        a
+    /// [`ForwardModel::solve`] for `loads` plus `theta_k` at `params[k]` (see
+    /// [`super::Differentiable::solve_params`]).
+    pub fn solve_params(
+        &mut self,
+        loads: &Loads,
+        params: &[ParamSite],
+        theta: &[f64],
+        start: Start,
+    ) -> Result<LadderReport, LadderError> {
+        check_loads(&self.layout.robot, loads)?;
+        self.b.loads.set(loads);
+        add_params(&mut self.b.loads, params, theta)?;
+        Ok(self.run(start))
     }
-}
 
-impl ForwardModel for PiecewiseConstantCurvature {
-    fn solve(&mut self, loads: &Loads, start: Start) -> Result<LadderReport, LadderError> {
-        check_loads(&self.robot, loads)?;
+    /// The solve proper, on the loads already in `self.b.loads`.
+    fn run(&mut self, start: Start) -> LadderReport {
         let cold = start == Start::Cold || !self.report.status.is_converged();
         let mut iterations = 0;
         let (mut status, mut residual) = (SolveStatus::MaxIterations, f64::INFINITY);
@@ -456,8 +405,8 @@ impl ForwardModel for PiecewiseConstantCurvature {
             // the first sweep from the straight rod measures the load: its largest
             // bending angle per unit length times L
             self.reset();
-            self.kinematics();
-            let theta0 = self.moments(loads, 1.0);
+            self.layout.kinematics(&mut self.b);
+            let theta0 = self.layout.moments(&mut self.b, 1.0);
             self.reset();
             if theta0.is_finite() && theta0 > CONTINUATION_ANGLE {
                 steps = ((theta0 / CONTINUATION_ANGLE).ceil() as usize).min(MAX_CONTINUATION);
@@ -472,7 +421,7 @@ impl ForwardModel for PiecewiseConstantCurvature {
             } else {
                 self.settings.tolerance.max(1e-4)
             };
-            (status, residual) = self.iterate(loads, lam, budget, tol, &mut iterations);
+            (status, residual) = self.iterate(lam, budget, tol, &mut iterations);
             if !status.is_converged() {
                 break;
             }
@@ -480,20 +429,171 @@ impl ForwardModel for PiecewiseConstantCurvature {
         if status == SolveStatus::NonFinite {
             self.reset();
         }
-        self.kinematics();
+        self.layout.kinematics(&mut self.b);
         for (j, l) in self.lengths.iter_mut().enumerate() {
-            *l = path_length(&self.base_holes[j], &self.hole_pts[j]);
+            *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
         }
         self.report = LadderReport {
             status,
             iterations,
             residual,
         };
-        Ok(self.report)
+        self.report
+    }
+
+    /// Exact sensitivities `d l_j / d theta_k` of the cable lengths to load
+    /// parameters at the last solve's loads and shape, by implicit differentiation of
+    /// the fixed point `u = Phi(u, theta)` of steps 1-3 (module `sens`): row-major
+    /// `c x p` into `out`, the lengths into `lengths`. Force and torque sites must be
+    /// world-frame point loads. Costs `ceil((3 pieces + p) / 6)` dual sweeps and one
+    /// LU of size `3 pieces`; allocates on the first call only. `false` when the last
+    /// solve did not converge, a site is invalid, or `I - Phi_u` is singular.
+    pub fn length_sensitivities(
+        &mut self,
+        params: &[ParamSite],
+        out: &mut [f64],
+        lengths: &mut [f64],
+    ) -> bool {
+        let (n, p, c) = (3 * self.b.u.len(), params.len(), self.lengths.len());
+        if !self.report.status.is_converged() || out.len() < c * p {
+            return false;
+        }
+        if !matches!(&self.sens, Some((_, imp)) if imp.p == p) {
+            self.sens = Some((Buf::new(&self.layout), Implicit::new(n, p, c)));
+        }
+        let Some((bd, imp)) = &mut self.sens else {
+            return false;
+        };
+        let w = imp.width();
+        for c0 in (0..w).step_by(W) {
+            seed_u(&self.b.u, &mut bd.u, c0);
+            if !seed_theta(&self.b.loads, &mut bd.loads, params, n, c0) {
+                return false;
+            }
+            self.layout.kinematics(bd);
+            self.layout.moments(bd, 1.0);
+            for (i, u) in bd.u_new.iter().enumerate() {
+                for a in 0..3 {
+                    scatter(&mut imp.phi, w, 3 * i + a, &u[a], c0);
+                }
+            }
+            for (j, pts) in bd.hole_pts.iter().enumerate() {
+                let base = self.layout.base_holes[j].map(D6::constant);
+                scatter(&mut imp.len, w, j, &path_length_t(&base, pts), c0);
+            }
+        }
+        for (l, v) in lengths.iter_mut().zip(&self.lengths) {
+            *l = *v;
+        }
+        imp.solve(out)
+    }
+}
+
+impl Layout {
+    /// Step 1 of a sweep: poses and holes from `b.u`.
+    fn kinematics<T: Real>(&self, b: &mut Buf<T>) {
+        for (i, p) in self.pieces.iter().enumerate() {
+            let s = b.bound[i];
+            b.mid[i] = arc_pose_t(&s, &b.u[i], 0.5 * p.h);
+            b.quarter[i] = arc_pose_t(&s, &b.u[i], 0.75 * p.h).position;
+            b.bound[i + 1] = arc_pose_t(&s, &b.u[i], p.h);
+        }
+        for (j, c) in self.robot.cables().iter().enumerate() {
+            for (k, &g) in c.route.iter().enumerate() {
+                let pose = &b.bound[self.guide_boundary[g]];
+                let hole = self.robot.guides()[g].holes[c.hole].map(T::cst);
+                b.hole_pts[j][k] = pose.position + pose.rotation * hole;
+            }
+        }
+    }
+
+    /// Steps 2-3: new curvatures into `b.u_new` at load scale `lam`; returns the
+    /// largest change times `L`.
+    fn moments<T: Real>(&self, b: &mut Buf<T>, lam: f64) -> f64 {
+        let g = b.loads.gravity * lam;
+        let gt = g.map(T::cst);
+        let secs = self.robot.sections();
+        let mut n = Vector3::<T>::zeros();
+        let mut m = Vector3::<T>::zeros();
+        let mut change: f64 = 0.0;
+        for i in (0..self.pieces.len()).rev() {
+            let bi = i + 1;
+            let rb = b.bound[bi].position;
+            // loads at boundary bi (distal end of piece i); m is about rb
+            for mark in &self.marks[self.mark_at[bi]..self.mark_at[bi + 1]] {
+                match *mark {
+                    Mark::SectionEnd(k) => {
+                        for p in b.loads.points.iter().filter(|p| p.section == k) {
+                            let rot = &b.bound[bi].rotation;
+                            let (f, t) = if p.body {
+                                (rot * p.force, rot * p.torque)
+                            } else {
+                                (p.force, p.torque)
+                            };
+                            n += f.map(|x| x.scale(lam)) + gt * p.mass;
+                            m += t.map(|x| x.scale(lam));
+                        }
+                    }
+                    Mark::Guide(gi) => {
+                        if self.guide_mass == GuideMass::Point {
+                            n += (g * self.robot.guides()[gi].mass).map(T::cst);
+                        }
+                        for &(j, k) in &self.guide_cables[gi] {
+                            let t = b.loads.tensions[j].scale(lam);
+                            if t == T::zero() {
+                                continue;
+                            }
+                            let pts = &b.hole_pts[j];
+                            let p = pts[k];
+                            let prev = if k == 0 {
+                                self.base_holes[j].map(T::cst)
+                            } else {
+                                pts[k - 1]
+                            };
+                            let mut f = unit_t(prev - p) * t;
+                            if k + 1 < pts.len() {
+                                f += unit_t(pts[k + 1] - p) * t;
+                            }
+                            n += f;
+                            m += (p - rb).cross(&f);
+                        }
+                    }
+                }
+            }
+            let piece = self.pieces[i];
+            let w = (g * (piece.lambda * piece.h)).map(T::cst);
+            let ra = b.bound[i].position;
+            let rm = b.mid[i].position;
+            // midpoint moment: transport from rb plus the distal half's weight
+            let c_half = (rm + b.quarter[i].map(|x| x.scale(4.0)) + rb).map(|x| x.scale(1.0 / 6.0));
+            let m_mid = m + (rb - rm).cross(&n) + (c_half - rm).cross(&w.map(|x| x.scale(0.5)));
+            let sec = &secs[piece.section];
+            let ml = b.mid[i].rotation.transpose() * m_mid;
+            let stiff = &sec.stiffness.bend_twist;
+            let pre = &sec.precurvature;
+            let u = Vector3::from_fn(|a, _| ml[a].scale(1.0 / stiff[a]) + T::cst(pre[a]));
+            for a in 0..3 {
+                change = change.max((u[a].re() - b.u[i][a].re()).abs());
+            }
+            b.u_new[i] = u;
+            // transport (n, m) to the piece's start
+            let c = (ra + rm.map(|x| x.scale(4.0)) + rb).map(|x| x.scale(1.0 / 6.0));
+            m += (rb - ra).cross(&n) + (c - ra).cross(&w);
+            n += w;
+        }
+        change * self.robot.length()
+    }
+}
+
+impl ForwardModel for PiecewiseConstantCurvature {
+    fn solve(&mut self, loads: &Loads, start: Start) -> Result<LadderReport, LadderError> {
+        check_loads(&self.layout.robot, loads)?;
+        self.b.loads.set(loads);
+        Ok(self.run(start))
     }
 
     fn tip_position(&self) -> Vector3<f64> {
-        self.bound[self.bound.len() - 1].position
+        self.b.bound[self.b.bound.len() - 1].position
     }
 
     fn cable_lengths_into(&self, out: &mut [f64]) {
@@ -503,15 +603,24 @@ impl ForwardModel for PiecewiseConstantCurvature {
     }
 
     fn output(&mut self) -> LadderOutput {
+        let l = &self.layout;
         LadderOutput {
             report: self.report,
-            section_tips: self.section_ends.iter().map(|&b| self.bound[b]).collect(),
-            guides: self.guide_boundary.iter().map(|&b| self.bound[b]).collect(),
+            section_tips: l
+                .section_ends
+                .iter()
+                .map(|&b| self.b.bound[b].pose())
+                .collect(),
+            guides: l
+                .guide_boundary
+                .iter()
+                .map(|&b| self.b.bound[b].pose())
+                .collect(),
             cable_lengths: self.lengths.clone(),
         }
     }
 
     fn robot(&self) -> &Robot {
-        &self.robot
+        &self.layout.robot
     }
 }

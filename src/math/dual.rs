@@ -165,6 +165,17 @@ impl<const N: usize> Real for Dual<N> {
     fn eps_mut(&mut self) -> &mut [f64] {
         &mut self.d
     }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        let (s, c) = self.v.sin_cos();
+        let mut ds = self.d;
+        let mut dc = self.d;
+        for (a, b) in ds.iter_mut().zip(dc.iter_mut()) {
+            *a *= c;
+            *b *= -s;
+        }
+        (Self { v: s, d: ds }, Self { v: c, d: dc })
+    }
 }
 
 #[cfg(test)]
@@ -182,5 +193,13 @@ mod tests {
         // df/dx = (y + 1/y) / (2f), df/dy = (x - x/y^2) / (2f)
         assert!((f.d[0] - 2.5 / (2.0 * v)).abs() < 1e-15);
         assert!((f.d[1] - 2.25 / (2.0 * v)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn sine_and_cosine_rules() {
+        let x = Dual::<1>::variable(0.7, 0);
+        let (s, c) = x.sin_cos();
+        assert!((s.v - 0.7f64.sin()).abs() < 1e-16 && (s.d[0] - 0.7f64.cos()).abs() < 1e-16);
+        assert!((c.v - 0.7f64.cos()).abs() < 1e-16 && (c.d[0] + 0.7f64.sin()).abs() < 1e-16);
     }
 }

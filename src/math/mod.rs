@@ -52,6 +52,9 @@ pub trait Real:
     fn eps(&self) -> &[f64];
     /// The derivative parts, mutable (empty for `f64`).
     fn eps_mut(&mut self) -> &mut [f64];
+    /// Sine and cosine (derivatives `cos x` and `-sin x`); the closed-form arcs of
+    /// the curvature rungs need them.
+    fn sin_cos(self) -> (Self, Self);
 }
 
 impl Real for f64 {
@@ -79,5 +82,9 @@ impl Real for f64 {
     #[inline(always)]
     fn eps_mut(&mut self) -> &mut [f64] {
         &mut []
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        f64::sin_cos(self)
     }
 }

@@ -7,7 +7,7 @@
 //! it reads the workspace's private buffers without widening their visibility; it
 //! adds methods only and changes none of the forward solver.
 
-use super::{max_abs, sweep, SolveStatus, Workspace};
+use super::{max_abs, sweep, SolveStatus, Wide, Workspace};
 use crate::math::Dual;
 
 /// Cumulative integration counts of one workspace (all solves and sweeps so far).
@@ -44,6 +44,9 @@ impl Workspace {
             return false;
         }
         self.jac_evals += 1;
+        if self.plan.condensed {
+            return self.joint_condensed(x, w, jac_s, jac_m);
+        }
         let ok = if w <= 3 {
             sweep::<3>(&self.plan, x, 0, true, &mut self.b3, jac_s, jac_m, 1.0)
         } else {
@@ -56,6 +59,37 @@ impl Workspace {
             let v = self.b64.theta[k];
             self.b3.theta[k] = Dual::constant(v);
             self.b6.theta[k] = Dual::constant(v);
+        }
+        ok
+    }
+
+    /// Condensed coupling: settle the segments at `x` (one `f64` pass), sweep with the
+    /// local directions, then restore the workspace's own point if `x` differs.
+    fn joint_condensed(
+        &mut self,
+        x: &[f64],
+        w: usize,
+        jac_s: &mut [f64],
+        jac_m: &mut [f64],
+    ) -> bool {
+        self.x_trial.copy_from_slice(x);
+        if !self.eval_trial(1.0) {
+            return false;
+        }
+        let (plan, b64) = (&self.plan, &mut self.b64);
+        let p = plan.params.len();
+        let ok = with_wide!(&mut self.wide, b => {
+            b.next.clone_from(&b64.next);
+            let ok = (0..w)
+                .step_by(6)
+                .all(|c0| sweep(plan, x, c0, true, b, jac_s, jac_m, 1.0));
+            for k in 0..p {
+                b.theta[k] = Dual::constant(b64.theta[k]);
+            }
+            ok
+        }, false);
+        if x != self.x.as_slice() {
+            self.eval_at(false, 1.0);
         }
         ok
     }
@@ -102,7 +136,9 @@ impl Workspace {
     pub fn rhs_counts(&self) -> RhsCounts {
         RhsCounts {
             f64_rhs: self.b64.rhs_evals,
-            dual_rhs: self.b3.rhs_evals + self.b6.rhs_evals,
+            dual_rhs: self.b3.rhs_evals
+                + self.b6.rhs_evals
+                + with_wide!(&self.wide, b => b.rhs_evals, 0),
         }
     }
 }

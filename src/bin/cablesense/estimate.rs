@@ -1,6 +1,6 @@
 //! `cablesense estimate SCENE --measure FILE`: a batch of encoder samples.
 
-use crate::stream::{error_json, estimate_json, estimator, parser, process};
+use crate::stream::{error_json, estimate_json, estimator, parser, process, MODEL_HELP};
 use anyhow::Context;
 use std::io::BufRead;
 use std::path::PathBuf;
@@ -18,11 +18,13 @@ pub struct Args {
     /// One JSON object per sample instead of a table.
     #[arg(long)]
     json: bool,
+    #[arg(long, default_value = "scene", help = MODEL_HELP)]
+    model: String,
 }
 
 /// Run `estimate`. Exit code 1 if any line was bad or any sample did not converge.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let (scene, mut est) = estimator(&a.scene)?;
+    let (scene, mut est) = estimator(&a.scene, &a.model)?;
     let mut p = parser(&scene, &est);
     let file = std::fs::File::open(&a.measure)
         .with_context(|| format!("opening {}", a.measure.display()))?;
@@ -30,9 +32,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if !a.json {
         let names = est.names().join("  ");
         println!(
-            "scene: {}   measurements: {}",
+            "scene: {}   measurements: {}   model: {}",
             a.scene.display(),
-            a.measure.display()
+            a.measure.display(),
+            a.model
         );
         println!(
             "{:>5} {:>8} {:<13} {}  (+- 1 sigma)   tip x y z (mm)",

@@ -5,6 +5,7 @@ mod calibrate;
 mod estimate;
 mod output;
 mod pareto;
+mod progress;
 mod solve;
 mod stability;
 mod stream;

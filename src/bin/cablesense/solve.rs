@@ -38,6 +38,19 @@ fn parse_len(s: &str) -> Result<f64, String> {
     ladder::parse_length(s).map_err(|e| e.to_string())
 }
 
+/// The rung of the full ladder with this label (`cc`, `pcc/point/16`, ...); the error
+/// lists the valid labels after `extra` (the command's other choices).
+pub fn rung_by_label(robot: &cablesense::Robot, label: &str, extra: &str) -> anyhow::Result<Rung> {
+    let all = ladder::full_ladder(robot);
+    let found = all.iter().find(|r| r.label() == label).cloned();
+    found.with_context(|| {
+        format!(
+            "unknown --model `{label}`; use {extra} or one of: {}",
+            all.iter().map(Rung::label).collect::<Vec<_>>().join(", ")
+        )
+    })
+}
+
 /// Run `solve`. Exit code 0 when converged, 1 when the solver did not converge.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let scene = Scene::load(&a.scene)?;
@@ -58,17 +71,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             )?;
             (choice.rung.clone(), Some(choice))
         }
-        label => {
-            let all = ladder::full_ladder(&robot);
-            let found = all.iter().find(|r| r.label() == label).cloned();
-            let rung = found.with_context(|| {
-                format!(
-                    "unknown --model `{label}`; use scene, auto or one of: {}",
-                    all.iter().map(Rung::label).collect::<Vec<_>>().join(", ")
-                )
-            })?;
-            (rung, None)
-        }
+        label => (rung_by_label(&robot, label, "scene, auto")?, None),
     };
     if let (Some(c), false) = (&choice, a.json) {
         print_choice(c, a.tol, a.tol_cable);

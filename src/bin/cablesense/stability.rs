@@ -17,6 +17,7 @@
 //! starts in steps of 0.1 (0.05 for tensions) with a jump guard). Writes `stability.csv` and `stability.svg` (heat map).
 
 use crate::pareto::across;
+use crate::progress;
 use anyhow::Context;
 use cablesense::estimate::{
     Axis, EstimateSpec, EstimateStatus, Estimator, Method, UnknownKind, UnknownSpec,
@@ -26,6 +27,7 @@ use cablesense::nalgebra::Vector3;
 use cablesense::{
     GuideMass, Integrator, Loads, PointLoad, Robot, RodModel, Scene, SolverSettings, Start,
 };
+use indicatif::ProgressBar;
 use plotters::prelude::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -44,6 +46,9 @@ pub struct Args {
     /// Output directory for stability.csv and stability.svg.
     #[arg(long, default_value = "out/stability")]
     out: PathBuf,
+    /// No progress bar or status lines on stderr.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 /// Load direction of a sweep.
@@ -276,9 +281,12 @@ fn forward_map(
     dir: Dir,
     refs: &[Option<Vector3<f64>>],
     out: &mut Vec<Point>,
+    pb: &ProgressBar,
 ) -> anyhow::Result<()> {
     let l = robot.length();
     for rung in forward_settings() {
+        pb.set_message(format!("{}: {}", dir.short(), rung.label()));
+        pb.inc(1);
         let starts: &[&'static str] = match rung {
             Rung::Rod(_) => &["cold", "warm", "continuation"],
             _ => &["cold", "warm"],
@@ -303,13 +311,15 @@ fn forward_map(
                 let rep = m.solve(&loads, st)?;
                 let time_s = t0.elapsed().as_secs_f64();
                 if time_s > 0.5 {
-                    eprintln!(
-                        "stability: slow point {} [{start}] {} {g}: {:.1} s, {:?}",
-                        rung.label(),
-                        dir.short(),
-                        time_s,
-                        rep
-                    );
+                    pb.suspend(|| {
+                        eprintln!(
+                            "stability: slow point {} [{start}] {} {g}: {:.1} s, {:?}",
+                            rung.label(),
+                            dir.short(),
+                            time_s,
+                            rep
+                        )
+                    });
                 }
                 let tip = m.tip_position();
                 let converged = rep.status.is_converged() && tip.iter().all(|x| x.is_finite());
@@ -342,14 +352,24 @@ fn est_axes(robot: &Robot) -> Vec<usize> {
     axes
 }
 
+/// Estimation methods of the map.
+const METHODS: [Method; 4] = [
+    Method::LevenbergMarquardt,
+    Method::GaussNewton,
+    Method::Constrained,
+    Method::ArgminGaussNewton,
+];
+
 fn estimate_map(
     robot: &Robot,
     scene: &Scene,
     dir: Dir,
     out: &mut Vec<Point>,
+    pb: &ProgressBar,
 ) -> anyhow::Result<()> {
     let axes = est_axes(robot);
     if axes.is_empty() || dir == Dir::Tension || dir == Dir::Axial {
+        pb.inc(METHODS.len() as u64);
         return Ok(());
     }
     let l = robot.length();
@@ -379,12 +399,9 @@ fn estimate_map(
         truth.push(axes.iter().map(|&a| f[a]).collect::<Vec<f64>>());
     }
     let fscale = ei / (l * l);
-    for method in [
-        Method::LevenbergMarquardt,
-        Method::GaussNewton,
-        Method::Constrained,
-        Method::ArgminGaussNewton,
-    ] {
+    for method in METHODS {
+        pb.set_message(format!("{}: estimate {method:?}", dir.short()));
+        pb.inc(1);
         let tip = robot.sections().len() - 1;
         let mut spec = EstimateSpec::new(
             axes.iter()
@@ -435,10 +452,12 @@ fn estimate_map(
             let status = est.tick(ch, None);
             let time_s = t0.elapsed().as_secs_f64();
             if time_s > 0.5 {
-                eprintln!(
-                    "stability: slow tick {method:?} {} {g}: {time_s:.1} s, {status:?}",
-                    dir.short()
-                );
+                pb.suspend(|| {
+                    eprintln!(
+                        "stability: slow tick {method:?} {} {g}: {time_s:.1} s, {status:?}",
+                        dir.short()
+                    )
+                });
             }
             let e = est.estimate();
             let err = e
@@ -486,20 +505,31 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let mut points = Vec::new();
     let t_all = Instant::now();
-    for dir in [Dir::Down, Dir::Up, Dir::Lateral, Dir::Axial, Dir::Tension] {
-        if dir == Dir::Tension && robot.cables().is_empty() {
-            continue;
-        }
+    let dirs: Vec<Dir> = [Dir::Down, Dir::Up, Dir::Lateral, Dir::Axial, Dir::Tension]
+        .into_iter()
+        .filter(|&d| d != Dir::Tension || !robot.cables().is_empty())
+        .collect();
+    // per direction: the reference, every forward setting, every estimation method
+    let per_dir = 1 + forward_settings().len() + METHODS.len();
+    let pb = progress::bar((dirs.len() * per_dir) as u64, a.quiet);
+    for dir in dirs {
         let t0 = Instant::now();
+        pb.set_message(format!("{}: reference", dir.short()));
         let refs = reference(&robot, &scene.loads, dir)?;
-        forward_map(&robot, &scene.loads, dir, &refs, &mut points)?;
-        estimate_map(&robot, &scene, dir, &mut points)?;
-        eprintln!(
-            "stability: {} done in {:.1} s",
-            dir.name(),
-            t0.elapsed().as_secs_f64()
+        pb.inc(1);
+        forward_map(&robot, &scene.loads, dir, &refs, &mut points, &pb)?;
+        estimate_map(&robot, &scene, dir, &mut points, &pb)?;
+        progress::note(
+            &pb,
+            a.quiet,
+            &format!(
+                "stability: {} done in {:.1} s",
+                dir.name(),
+                t0.elapsed().as_secs_f64()
+            ),
         );
     }
+    pb.finish_and_clear();
     let csv = a.out.join("stability.csv");
     write_csv(&csv, &points, robot.length())
         .with_context(|| format!("writing {}", csv.display()))?;

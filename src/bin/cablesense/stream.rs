@@ -1,14 +1,22 @@
 //! Shared by `estimate` and `track`: estimator from a scene, one JSON object per sample.
 
 use anyhow::Context;
-use cablesense::estimate::{Estimate, Estimator};
+use cablesense::estimate::{DynModel, Estimate, Estimator};
 use cablesense::files::measure::{LineError, Sample, StreamParser};
+use cablesense::ladder::Rung;
 use cablesense::Scene;
 use serde_json::{json, Value};
 use std::path::Path;
 
-/// Build the estimator of a scene that has an `[estimate]` table.
-pub fn estimator(scene_path: &Path) -> anyhow::Result<(Scene, Estimator)> {
+/// The `--model` option of `estimate` and `track`.
+pub const MODEL_HELP: &str = "Forward model under the estimator: `scene` (the scene's [numerics], the default) or a rung label of the model ladder such as `cc`, `pcc/point/16`, `kirchhoff/average/rk4-16`, `cosserat/accurate/adaptive-1e-8` (see `solve --model`)";
+
+/// The estimator's model, as a run-time choice.
+pub type SceneEstimator = Estimator<DynModel>;
+
+/// Build the estimator of a scene that has an `[estimate]` table, on the rung named
+/// by `model` (`scene` or a ladder label).
+pub fn estimator(scene_path: &Path, model: &str) -> anyhow::Result<(Scene, SceneEstimator)> {
     let scene = Scene::load(scene_path)?;
     let spec = scene.estimate.clone().with_context(|| {
         format!(
@@ -17,13 +25,26 @@ pub fn estimator(scene_path: &Path) -> anyhow::Result<(Scene, Estimator)> {
         )
     })?;
     let robot = scene.build_robot()?;
-    let est = Estimator::new(robot, scene.loads.clone(), scene.numerics.clone(), spec)
-        .with_context(|| format!("building the estimator of {}", scene_path.display()))?;
+    let rung = match model {
+        "scene" => Rung::Rod(scene.numerics.clone()),
+        "auto" => anyhow::bail!(
+            "--model auto picks a rung for one forward solve: run `cablesense solve {} --model auto` and pass the label it picks",
+            scene_path.display()
+        ),
+        label => crate::solve::rung_by_label(&robot, label, "scene")?,
+    };
+    let est = Estimator::on_rung(robot, scene.loads.clone(), &rung, spec).with_context(|| {
+        format!(
+            "building the estimator of {} on {}",
+            scene_path.display(),
+            rung.label()
+        )
+    })?;
     Ok((scene, est))
 }
 
 /// A parser for the scene's cable names.
-pub fn parser(scene: &Scene, est: &Estimator) -> StreamParser {
+pub fn parser(scene: &Scene, est: &SceneEstimator) -> StreamParser {
     let names = scene
         .robot
         .cables
@@ -36,7 +57,7 @@ pub fn parser(scene: &Scene, est: &Estimator) -> StreamParser {
 }
 
 /// Tick one sample and snapshot it.
-pub fn process(est: &mut Estimator, s: &Sample) -> Estimate {
+pub fn process(est: &mut SceneEstimator, s: &Sample) -> Estimate {
     est.tick(&s.changes_m, s.sigma_m.as_deref());
     est.estimate()
 }

@@ -1,6 +1,6 @@
 //! `cablesense track [SCENE]`: streaming estimation, one JSON line per input row.
 
-use crate::stream::{error_json, estimate_json, estimator, parser, process};
+use crate::stream::{error_json, estimate_json, estimator, parser, process, MODEL_HELP};
 use anyhow::Context;
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
@@ -15,18 +15,20 @@ pub struct Args {
     /// Read rows from this file instead of standard input.
     #[arg(long)]
     input: Option<PathBuf>,
+    #[arg(long, default_value = "scene", help = MODEL_HELP)]
+    model: String,
 }
 
 /// Run `track`: bad rows produce `{"line": n, "error": ...}` and the stream goes on.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let (scene_path, input) = match (a.scene, a.input) {
+    let (scene_path, input) = match (a.scene.clone(), a.input.clone()) {
         (Some(s), i) => (s, i),
         (None, i) => (
             PathBuf::from("data/scenes/track_demo.toml"),
             Some(i.unwrap_or_else(|| PathBuf::from("data/measurements/track_demo.csv"))),
         ),
     };
-    let (scene, mut est) = estimator(&scene_path)?;
+    let (scene, mut est) = estimator(&scene_path, &a.model)?;
     let mut p = parser(&scene, &est);
     let reader: Box<dyn BufRead> = match &input {
         Some(f) => Box::new(std::io::BufReader::new(
