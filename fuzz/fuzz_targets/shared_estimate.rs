@@ -20,7 +20,8 @@
 //!   |x| <= 1e-300 (see `value`).
 //!
 //! What counts as a bug: a panic; a hang (budgets are small here: the forward
-//! settings of `ForwardInput`, at most 4 estimator iterations); a poisoned spec that
+//! settings of `ForwardInput`, at most 4 estimator iterations); a tick overrunning its
+//! time budget by more than one step ([`BUDGET_SLACK_S`]); a poisoned spec that
 //! builds; and after any tick: a status other than `tick`'s own, `NoData` not
 //! reported when nothing can be estimated, measured values not the finite inputs,
 //! a non-finite current estimate (every later tick warm-starts from it), and, when
@@ -52,6 +53,12 @@ pub const TICK_BYTES: usize = 1 + 2 * MAX_CABLES * 9;
 pub const MAX_TICKS: usize = 4;
 /// Estimator iteration limit (1..=this).
 const MAX_ESTIMATE_ITERATIONS: u8 = 4;
+/// A tick with a time budget `b` must return within `2 b +` this (s). The estimator
+/// checks its budget between steps, so it may overrun by one step: a sensitivity sweep
+/// plus two forward solves of these small robots, milliseconds even on a loaded machine.
+/// (argmin's Gauss-Newton is exempt: it does not honour the budget, see the README of
+/// `fuzz/regressions/`.)
+const BUDGET_SLACK_S: f64 = 0.5;
 
 /// One sample for `Estimator::tick`.
 #[derive(Clone, Debug)]
@@ -351,8 +358,16 @@ pub fn check_estimator(input: &EstimatorInput) {
     assert_eq!(est.theta().len(), p, "one estimate per unknown");
     for (i, tick) in input.ticks.iter().enumerate() {
         let what = format!("tick {i} ({:?}, {tick:?})", spec.method);
+        let t0 = std::time::Instant::now();
         let status = est.tick(&tick.changes, tick.sigma.as_deref());
+        let elapsed = t0.elapsed().as_secs_f64();
         assert_eq!(status, est.status(), "{what}: tick and status() differ");
+        if let Some(b) = spec.time_budget_s {
+            assert!(
+                spec.method == Method::ArgminGaussNewton || elapsed <= 2.0 * b + BUDGET_SLACK_S,
+                "{what}: {status:?} after {elapsed} s with a time budget of {b} s"
+            );
+        }
         // which cables the estimator must count as measured
         let valid: Vec<bool> = (0..c)
             .map(|j| {
