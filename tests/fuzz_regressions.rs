@@ -1,11 +1,16 @@
 //! Replays every committed fuzz input through the fuzz targets' own checks
-//! (`fuzz/fuzz_targets/shared.rs`): the seed corpora in `fuzz/seeds/<target>/` and
-//! the minimized crashers in `fuzz/regressions/<target>/` (rust-lang/regex style).
+//! (`fuzz/fuzz_targets/shared.rs`, `shared_stream.rs`, `shared_estimate.rs`): the seed
+//! corpora in `fuzz/seeds/<target>/` and the minimized crashers in
+//! `fuzz/regressions/<target>/` (rust-lang/regex style).
 //! A failure names the file; reproduce it with
 //! `cargo fuzz run --sanitizer none <target> fuzz/regressions/<target>/<file>`.
 
 #[path = "../fuzz/fuzz_targets/shared.rs"]
 mod shared;
+#[path = "../fuzz/fuzz_targets/shared_estimate.rs"]
+mod shared_estimate;
+#[path = "../fuzz/fuzz_targets/shared_stream.rs"]
+mod shared_stream;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -65,4 +70,14 @@ fn scene_json_inputs() {
 #[test]
 fn forward_solve_inputs() {
     replay("forward_solve", shared::forward_solve, 2);
+}
+
+#[test]
+fn encoder_stream_inputs() {
+    replay("encoder_stream", shared_stream::encoder_stream, 6);
+}
+
+#[test]
+fn estimator_tick_inputs() {
+    replay("estimator_tick", shared_estimate::estimator_tick, 6);
 }

@@ -219,34 +219,39 @@ pub struct ForwardInput {
     pub perturbation: [f64; 3],
 }
 
-/// Reads the fixed layout: `u16` little-endian fractions, then `u8` choices.
-struct Reader<'a> {
+/// Reads the fixed layout: `u16` little-endian fractions, then `u8` choices (also
+/// used by `shared_estimate.rs`). Past the end of the data it reads zeros.
+pub(crate) struct Reader<'a> {
     data: &'a [u8],
     pos: usize,
 }
 
-impl Reader<'_> {
-    fn byte(&mut self) -> u8 {
+impl<'a> Reader<'a> {
+    /// A reader of `data` starting at byte `pos`.
+    pub(crate) fn new(data: &'a [u8], pos: usize) -> Self {
+        Self { data, pos }
+    }
+    pub(crate) fn byte(&mut self) -> u8 {
         let b = self.data.get(self.pos).copied().unwrap_or(0);
         self.pos += 1;
         b
     }
     /// A fraction in [0, 1].
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         let lo = self.byte();
         let hi = self.byte();
         f64::from(u16::from_le_bytes([lo, hi])) / f64::from(u16::MAX)
     }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+    pub(crate) fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.unit()
     }
-    fn log_range(&mut self, lo: f64, hi: f64) -> f64 {
+    pub(crate) fn log_range(&mut self, lo: f64, hi: f64) -> f64 {
         (lo.ln() + (hi.ln() - lo.ln()) * self.unit()).exp()
     }
-    fn vec3(&mut self, half: f64) -> [f64; 3] {
+    pub(crate) fn vec3(&mut self, half: f64) -> [f64; 3] {
         [0, 1, 2].map(|_| self.range(-half, half))
     }
-    fn choice(&mut self, n: u8) -> u8 {
+    pub(crate) fn choice(&mut self, n: u8) -> u8 {
         self.byte() % n
     }
 }

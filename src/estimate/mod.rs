@@ -648,6 +648,18 @@ impl<M: EstimationModel> Estimator<M> {
                 }
                 // rejected: back to the accepted point
                 self.forward(false);
+                // The budget also bounds the trials of one iteration (up to MAX_TRIALS,
+                // two forward solves each), not only the iteration count: without this a
+                // 1 ms budget let one LM iteration of rejected trials run for a second
+                // (fuzz/regressions/estimator_tick/time_budget_ignored_in_trials.bin).
+                if self
+                    .spec
+                    .time_budget_s
+                    .is_some_and(|b| t0.elapsed().as_secs_f64() > b)
+                {
+                    self.cost = cost;
+                    return EstimateStatus::TimeBudget;
+                }
                 if !fresh {
                     self.g_valid = false;
                     break false;
