@@ -537,6 +537,8 @@ impl<M: EstimationModel> Estimator<M> {
         } else {
             0.0
         };
+        // scaled size of the last accepted step (contraction estimate below)
+        let mut prev_step = f64::INFINITY;
         for it in 0..self.spec.max_iterations {
             self.iterations = it + 1;
             if let Some(b) = self.spec.time_budget_s {
@@ -579,12 +581,22 @@ impl<M: EstimationModel> Estimator<M> {
                     self.solve_step(self.mu);
                 }
                 let mut small = true;
+                let mut size = 0.0f64;
                 for k in 0..p {
                     let s = self.step[k] * scale;
                     self.theta_trial[k] = (self.theta[k] + s).clamp(self.lb[k], self.ub[k]);
                     let taken = self.theta_trial[k] - self.theta[k];
                     self.step[k] = taken;
                     small &= taken.abs() <= self.spec.tolerance * (1.0 + self.theta[k].abs());
+                    size = size.max(taken.abs() / (1.0 + self.theta[k].abs()));
+                }
+                if small && !self.g_exact && size > 0.5 * prev_step {
+                    // Reused (Broyden-updated) sensitivities converge only linearly: a
+                    // step that shrank by less than half since the last one leaves an
+                    // error of up to step * rho / (1 - rho) > step. Certify with a
+                    // fresh sweep instead (seen: error 100x the step tolerance).
+                    self.g_valid = false;
+                    break false;
                 }
                 if small {
                     // a step made tiny by heavy damping certifies nothing by itself:
@@ -644,6 +656,7 @@ impl<M: EstimationModel> Estimator<M> {
                     self.g_exact = false;
                     std::mem::swap(&mut self.theta, &mut self.theta_trial);
                     cost = new_cost;
+                    prev_step = size;
                     break true;
                 }
                 // rejected: back to the accepted point

@@ -86,6 +86,10 @@ impl Workspace {
             for k in 0..p {
                 b.theta[k] = Dual::constant(b64.theta[k]);
             }
+            if ok && b.mlin_valid {
+                b64.mlin.clone_from(&b.mlin);
+                b64.mlin_valid = true;
+            }
             ok
         }, false);
         if x != self.x.as_slice() {

@@ -283,7 +283,15 @@ pub fn problem_b() -> Problem {
     Problem {
         robot: two_section_robot(),
         loads: Loads::default(),
-        settings: SolverSettings::default(),
+        // Forward tolerance 1e-12, not the default 1e-10: the section-0 forces are
+        // weakly observable here, and a forward residual of 1e-10 moves the lengths
+        // enough to shift the estimate by ~1e-8 N and the tip by ~1.3e-9 m (proptest
+        // regression in proptest-regressions/estimate_roundtrip.txt), over the 1e-9 m
+        // the round trip asserts.
+        settings: SolverSettings {
+            tolerance: 1e-12,
+            ..SolverSettings::default()
+        },
         unknowns: vec![
             force(0, Axis::X),
             force(0, Axis::Y),
