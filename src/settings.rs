@@ -98,6 +98,10 @@ pub struct SolverSettings {
     pub max_continuation_steps: usize,
     /// How tensioned cables' next-chord directions are resolved (default `condensed`).
     pub cable_coupling: CableCoupling,
+    /// Reject a cold solve's equilibrium that fails Jacobi's condition (status
+    /// `unstable`; default true). Applies under world-fixed loads without tensioned
+    /// cables; costs one extra dual sweep per cold solve, none per warm solve.
+    pub branch_guard: bool,
 }
 
 impl Default for SolverSettings {
@@ -111,6 +115,7 @@ impl Default for SolverSettings {
             continuation: true,
             max_continuation_steps: 32,
             cable_coupling: CableCoupling::default(),
+            branch_guard: true,
         }
     }
 }

@@ -41,6 +41,12 @@ pub enum SolveStatus {
     /// The integration produced NaN/infinity from the start point (loads far beyond
     /// what the rod can carry, or a wildly wrong warm start). Nothing is usable.
     NonFinite,
+    /// A cold solve converged, but on an equilibrium that fails Jacobi's condition
+    /// (a conjugate point, [`Workspace::conjugate_point`]): not a minimum of the
+    /// potential energy, e.g. a looped or inverted rod under a large tip force, not the
+    /// shape the robot takes. Checked for cold solves under world-fixed loads without
+    /// tensioned cables (where `n(0)` is in closed form); do not use the shape.
+    Unstable,
 }
 
 impl SolveStatus {

@@ -89,6 +89,11 @@ pub(crate) struct PassBuf<T: Real> {
     pub anchor: Vec<(Vector3<f64>, Matrix3<f64>)>,
     /// Scratch for the per-segment linear solve of a dual pass.
     lin: Vec<f64>,
+    /// Dual passes: watch `det d(n, m)(s) / d(n0, m0)` (or `det dm(s)/dm0` when `n(0)`
+    /// is in closed form) along the rod for a sign change (a conjugate point).
+    pub watch: bool,
+    /// First arc length (m) where the watched determinant changed sign.
+    pub conjugate_at: Option<f64>,
 }
 
 impl<T: Real> PassBuf<T> {
@@ -115,6 +120,8 @@ impl<T: Real> PassBuf<T> {
             mlin_valid: false,
             anchor: vec![(Vector3::zeros(), Matrix3::identity()); plan.pending.len()],
             lin: vec![0.0; plan.max_local * (plan.max_local + T::DIRS + plan.max_local)],
+            watch: false,
+            conjugate_at: None,
         }
     }
 }
@@ -142,9 +149,6 @@ pub(crate) const LOCAL_TOL: f64 = 1e-15;
 const LOCAL_FLOOR: f64 = 1e-13;
 /// Condensed coupling: segment re-integrations allowed per disk.
 const MAX_LOCAL_ITERATIONS: usize = 60;
-/// Condensed coupling: after this many iterations `M` from the sweep is dropped for
-/// the plain fixed point (an outdated `M` can cycle).
-const SWEEP_M_ITERATIONS: usize = 12;
 
 /// Where a pass can return to re-integrate a segment (condensed coupling).
 struct Checkpoint<T: Real> {
@@ -163,7 +167,14 @@ struct Checkpoint<T: Real> {
     iterations: usize,
     /// Largest hole error of the previous attempt (m).
     last_error: f64,
+    /// Local iteration matrix (`L x L`) and the previous attempt's error and step.
+    h: [f64; MAX_LOCAL * MAX_LOCAL],
+    prev_err: [f64; MAX_LOCAL],
+    prev_step: [f64; MAX_LOCAL],
 }
+
+/// Largest number of local directions (3 per condensed cable).
+const MAX_LOCAL: usize = 3 * super::plan::MAX_CONDENSED_CABLES;
 
 #[inline]
 fn v3<T: Real>(v: &Vector3<f64>) -> Vector3<T> {
@@ -265,6 +276,13 @@ pub(crate) fn pass<T: Real>(
                         for k in 0..iv.steps {
                             y = rk4_step(&y, h, &c);
                             buf.rhs_evals += 4;
+                            if T::DIRS > 0
+                                && buf.watch
+                                && buf.conjugate_at.is_none()
+                                && wrench_det(plan, &y) <= 0.0
+                            {
+                                buf.conjugate_at = Some(iv.s0 + h * (k + 1) as f64);
+                            }
                             if let Some(r) = rec.as_deref_mut() {
                                 push_sample(r, iv.s0 + h * (k + 1) as f64, &y, &c);
                             }
@@ -283,6 +301,13 @@ pub(crate) fn pass<T: Real>(
                             let err = if out.err.is_finite() { out.err } else { 1e10 };
                             if err <= 1.0 {
                                 y = out.y;
+                                if T::DIRS > 0
+                                    && buf.watch
+                                    && buf.conjugate_at.is_none()
+                                    && wrench_det(plan, &y) <= 0.0
+                                {
+                                    buf.conjugate_at = Some(s + h);
+                                }
                                 s = if iv.s1 - s - h <= 1e-14 * ls {
                                     iv.s1
                                 } else {
@@ -350,6 +375,9 @@ pub(crate) fn pass<T: Real>(
                         h_adapt,
                         iterations: 0,
                         last_error: f64::INFINITY,
+                        h: [0.0; MAX_LOCAL * MAX_LOCAL],
+                        prev_err: [0.0; MAX_LOCAL],
+                        prev_step: [0.0; MAX_LOCAL],
                     });
                 }
             }
@@ -541,11 +569,10 @@ fn settle_segment<T: Real>(
             worst = worst.max(err[3 * i + a].abs());
         }
     }
-    let use_m = buf.mlin_valid && ck.iterations < SWEEP_M_ITERATIONS;
-    // round-off: Newton with M converges quadratically, so an error that stops
-    // shrinking is the floor; the plain fixed point contracts linearly (as slowly as
-    // 0.5 per attempt at high tension), so it gets a floor 100x lower
-    let floor = if use_m {
+    // round-off: Newton with the sweep's M converges quadratically, so an error that
+    // stops shrinking is the floor; from the plain fixed point the secant updates
+    // start slowly, so that gets a floor 100x lower
+    let floor = if buf.mlin_valid {
         LOCAL_FLOOR
     } else {
         1e-2 * LOCAL_FLOOR
@@ -555,15 +582,46 @@ fn settle_segment<T: Real>(
         return true;
     }
     ck.last_error = worst;
-    let m = &buf.mlin[ck.g];
+    // H approximates -(dg/dq)^-1 for g(q) = p(q) - q: the sweep's (I - A)^-1, or I
+    // (the plain fixed point) before any sweep, improved by Broyden's inverse update
+    // from the last attempt's secant (dg dq: observed change of g over step dq),
+    // H <- H - (dq + H dg) dg^T / (dg^T dg), so a stale M or strong coupling near
+    // doubling back still converges superlinearly.
+    if ck.iterations == 0 {
+        for r in 0..l {
+            for c in 0..l {
+                ck.h[r * l + c] = if buf.mlin_valid {
+                    buf.mlin[ck.g][r * l + c]
+                } else if r == c {
+                    1.0
+                } else {
+                    0.0
+                };
+            }
+        }
+    } else {
+        let mut dg = [0.0; 3 * super::plan::MAX_CONDENSED_CABLES];
+        let mut dd = 0.0;
+        for r in 0..l {
+            dg[r] = err[r] - ck.prev_err[r];
+            dd += dg[r] * dg[r];
+        }
+        if dd > 0.0 {
+            for r in 0..l {
+                let hdg: f64 = (0..l).map(|c| ck.h[r * l + c] * dg[c]).sum();
+                let u = (ck.prev_step[r] + hdg) / dd;
+                for (hc, dgc) in ck.h[r * l..(r + 1) * l].iter_mut().zip(&dg[..l]) {
+                    *hc -= u * dgc;
+                }
+            }
+        }
+    }
     for (i, &(j, k)) in pend.iter().enumerate() {
         for a in 0..3 {
             let r = 3 * i + a;
-            let step = if use_m {
-                (0..l).map(|c| m[r * l + c] * err[c]).sum()
-            } else {
-                err[r]
-            };
+            let step: f64 = (0..l).map(|c| ck.h[r * l + c] * err[c]).sum();
+            ck.prev_step[r] = step;
+            ck.prev_err[r] = err[r];
             buf.next[j][k][a] += step;
         }
     }
@@ -621,6 +679,55 @@ fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut State<T>, g:
     y.rot.iter_mut().for_each(fold);
     y.n.iter_mut().for_each(fold);
     y.m.iter_mut().for_each(fold);
+}
+
+/// Determinant of `d(n, m)/d(n0, m0)` (6 x 6), or of `dm/dm0` (3 x 3) when `n(0)` is
+/// in closed form, from the first derivative directions of a dual state seeded along
+/// the base wrench. It is positive at the base; a zero crossing along the rod is a
+/// conjugate point (Jacobi's condition), past which the equilibrium is not a minimum
+/// of the potential energy of the clamped-free rod under dead loads.
+fn wrench_det<T: Real>(plan: &Plan, y: &State<T>) -> f64 {
+    let k = if plan.closed_form { 3 } else { 6 };
+    let mut a = [0.0; 36];
+    for c in 0..k {
+        for r in 0..3 {
+            if k == 3 {
+                a[r * 3 + c] = y.m[r].eps()[c];
+            } else {
+                a[r * 6 + c] = y.n[r].eps()[c];
+                a[(r + 3) * 6 + c] = y.m[r].eps()[c];
+            }
+        }
+    }
+    det_small(&mut a[..k * k], k)
+}
+
+/// Determinant by Gaussian elimination with partial pivoting (destroys `a`).
+fn det_small(a: &mut [f64], n: usize) -> f64 {
+    let mut det = 1.0;
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&x, &y| a[x * n + col].abs().total_cmp(&a[y * n + col].abs()))
+            .unwrap_or(col);
+        if a[piv * n + col] == 0.0 {
+            return 0.0;
+        }
+        if piv != col {
+            for c in 0..n {
+                a.swap(piv * n + c, col * n + c);
+            }
+            det = -det;
+        }
+        let d = a[col * n + col];
+        det *= d;
+        for r in col + 1..n {
+            let f = a[r * n + col] / d;
+            for c in col..n {
+                a[r * n + c] -= f * a[col * n + c];
+            }
+        }
+    }
+    det
 }
 
 /// Solve `a x = b` in place (`a` is `n x n`, `b` is `n x w`, row-major) by Gaussian

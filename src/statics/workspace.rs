@@ -346,11 +346,20 @@ impl Workspace {
         self.b64.local_tol = if warm { LOCAL_TOL } else { 1e-9 };
         let (mut status, it) = self.newton(1.0, budget);
         iterations += it;
+        // branch guard: a cold Newton can land on an unstable equilibrium (looped or
+        // inverted rod, seen from PL^2/EI ~ 5 on); continuation may still reach the
+        // stable one from the unloaded rod
+        if !warm && status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
+            status = SolveStatus::Unstable;
+        }
         if !status.is_converged() && self.settings.continuation {
             let (st, it, steps) = self.continuation();
             status = st;
             iterations += it;
             continuation_steps = steps;
+            if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
+                status = SolveStatus::Unstable;
+            }
         }
         if !status.is_converged() && self.best_res < max_abs(&self.res) {
             // hand back the best full-load iterate, not a partial-load point
@@ -665,6 +674,55 @@ impl Workspace {
         self.x.copy_from_slice(&x_ok);
         let (st, it) = self.newton(1.0, self.settings.max_iterations);
         (st, iterations + it, steps)
+    }
+
+    /// Whether cold solves get the branch guard: world-fixed (dead) loads and no
+    /// tensioned cable, where `n(0)` is in closed form and Jacobi's condition on
+    /// `dm(s)/dm0` is the stability test of the clamped-free rod.
+    fn guarded(&self) -> bool {
+        self.settings.branch_guard && self.plan.closed_form
+    }
+
+    /// Jacobi's condition at the current solution: the first arc length (m) where
+    /// `det d(n, m)(s)/d(n0, m0)` (or `det dm(s)/dm0` with `n(0)` in closed form)
+    /// changes sign, i.e. a conjugate point, or `None` when it keeps its sign on
+    /// `(0, L]`. One dual sweep along the base wrench. With the exact cable coupling the
+    /// hole unknowns are held fixed in that sweep, so the test is not defined there:
+    /// `None`.
+    pub fn conjugate_point(&mut self) -> Option<f64> {
+        let n = self.plan.n_unknowns;
+        let (plan, x) = (&self.plan, &self.x);
+        let mut scratch_s = [0.0; 36];
+        let jac_s = &mut scratch_s[..];
+        if plan.condensed {
+            if self.last_pass != Some(1.0) || self.b64.x != *x {
+                self.eval_at(false, 1.0);
+            }
+            let (plan, x, b64) = (&self.plan, &self.x, &self.b64);
+            return with_wide!(&mut self.wide, b => {
+                b.next.clone_from(&b64.next);
+                b.watch = true;
+                b.conjugate_at = None;
+                let ok = sweep(plan, x, 0, false, b, jac_s, &mut [], 1.0);
+                b.watch = false;
+                if ok { b.conjugate_at } else { None }
+            }, None);
+        }
+        if n == 3 {
+            self.b3.watch = true;
+            self.b3.conjugate_at = None;
+            let ok = sweep::<3>(plan, x, 0, false, &mut self.b3, jac_s, &mut [], 1.0);
+            self.b3.watch = false;
+            ok.then_some(self.b3.conjugate_at).flatten()
+        } else if n == 6 {
+            self.b6.watch = true;
+            self.b6.conjugate_at = None;
+            let ok = sweep::<6>(plan, x, 0, false, &mut self.b6, jac_s, &mut [], 1.0);
+            self.b6.watch = false;
+            ok.then_some(self.b6.conjugate_at).flatten()
+        } else {
+            None
+        }
     }
 
     /// Current scaled shooting unknowns (layout in the `statics` module docs).
