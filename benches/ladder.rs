@@ -11,7 +11,7 @@
 //!   section; Kirchhoff and Cosserat rods at RK4 8/24/64 steps per section and adaptive
 //!   Dormand-Prince at tol 1e-6 and 1e-10. The curvature rungs and the rods use the
 //!   scene's guide-mass model (accurate); other settings are the rungs' defaults.
-//! * `ladder_estimate_tick`: per rod rung, Levenberg-Marquardt (`EstimateSpec` defaults)
+//! * `ladder_estimate_tick`: per rung (curvature rungs included), Levenberg-Marquardt (`EstimateSpec` defaults)
 //!   with the vertical tip force as unknown (the one cable sees it); the measurements
 //!   are the same rung's cable changes along a slowly varying extra tip force
 //!   `-0.02 - 0.01 sin t` N (32 samples, cycled), one warm `tick` per iteration.
@@ -177,9 +177,6 @@ fn estimate_tick(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(300))
         .sample_size(20);
     for (id, rung) in rungs(&scene) {
-        let Some(settings) = rung.solver_settings() else {
-            continue; // the curvature rungs are forward-only
-        };
         let mut model = rung.build(&robot).expect("rung builds");
         let samples = samples(model.as_mut(), &scene.loads);
         let spec = EstimateSpec {
@@ -198,7 +195,8 @@ fn estimate_tick(c: &mut Criterion) {
                 initial: 0.0,
             }])
         };
-        let mut est = Estimator::new(robot.clone(), scene.loads.clone(), settings.clone(), spec)
+        // every rung, the curvature ones included (exact sensitivities, `ladder::sens`)
+        let mut est = Estimator::on_rung(robot.clone(), scene.loads.clone(), &rung, spec)
             .expect("estimator builds");
         for s in &samples {
             est.tick(s, None);
