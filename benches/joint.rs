@@ -37,19 +37,7 @@ fn scene(name: &str) -> Scene {
 /// of section 1 with the track demo's stopping rule.
 fn spec(scene: &Scene) -> EstimateSpec {
     scene.estimate.clone().unwrap_or_else(|| {
-        let u = |axis| UnknownSpec {
-            kind: UnknownKind::Force,
-            section: Some(1),
-            axis: Some(axis),
-            cable: None,
-            name: None,
-            min: None,
-            max: None,
-            prior_mean: None,
-            prior_sigma: None,
-            reference: 0.0,
-            initial: 0.0,
-        };
+        let u = |axis| UnknownSpec::force(1, axis);
         EstimateSpec {
             tolerance: 1e-7,
             ..EstimateSpec::new(vec![u(Axis::Y), u(Axis::Z)])
@@ -251,17 +239,8 @@ fn bench_case(
 fn robustness(scene: &Scene) {
     let robot = scene.build_robot().unwrap();
     let u = |cable| UnknownSpec {
-        kind: UnknownKind::Tension,
-        section: None,
-        axis: None,
         cable: Some(cable),
-        name: None,
-        min: None,
-        max: None,
-        prior_mean: None,
-        prior_sigma: None,
-        reference: 0.0,
-        initial: 0.0,
+        ..UnknownSpec::new(UnknownKind::Tension)
     };
     let spec = EstimateSpec::new(vec![u(0), u(1)]);
     let mut ws =

@@ -20,7 +20,7 @@
 //! the timed closures; a timed solve or tick that does not converge is counted and
 //! reported on stderr. Results log: `benches/README.md`.
 
-use cablesense::estimate::{Axis, EstimateSpec, EstimateStatus, Estimator, UnknownKind};
+use cablesense::estimate::{Axis, EstimateSpec, EstimateStatus, Estimator};
 use cablesense::estimate::{Method, UnknownSpec};
 use cablesense::ladder::{CcSettings, ForwardModel, PccSettings, Rung};
 use cablesense::{Integrator, Loads, PointLoad, RodModel, Scene, SolverSettings, Start};
@@ -181,19 +181,7 @@ fn estimate_tick(c: &mut Criterion) {
         let samples = samples(model.as_mut(), &scene.loads);
         let spec = EstimateSpec {
             method: Method::LevenbergMarquardt,
-            ..EstimateSpec::new(vec![UnknownSpec {
-                kind: UnknownKind::Force,
-                section: Some(0),
-                axis: Some(Axis::Y),
-                cable: None,
-                name: None,
-                min: None,
-                max: None,
-                prior_mean: None,
-                prior_sigma: None,
-                reference: 0.0,
-                initial: 0.0,
-            }])
+            ..EstimateSpec::new(vec![UnknownSpec::force(0, Axis::Y)])
         };
         // every rung, the curvature ones included (exact sensitivities, `ladder::sens`)
         let mut est = Estimator::on_rung(robot.clone(), scene.loads.clone(), &rung, spec)

@@ -77,17 +77,9 @@ fn allocations(f: impl FnOnce()) -> usize {
 
 fn unknown(kind: UnknownKind, section: Option<usize>, axis: Option<Axis>) -> UnknownSpec {
     UnknownSpec {
-        kind,
         section,
         axis,
-        cable: None,
-        name: None,
-        min: None,
-        max: None,
-        prior_mean: None,
-        prior_sigma: None,
-        reference: 0.0,
-        initial: 0.0,
+        ..UnknownSpec::new(kind)
     }
 }
 

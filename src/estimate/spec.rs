@@ -70,6 +70,33 @@ pub struct UnknownSpec {
 }
 
 impl UnknownSpec {
+    /// An unknown of `kind` with every option at its default: no site, name, bounds or
+    /// prior; reference and initial value 0.
+    pub fn new(kind: UnknownKind) -> Self {
+        Self {
+            kind,
+            section: None,
+            axis: None,
+            cable: None,
+            name: None,
+            min: None,
+            max: None,
+            prior_mean: None,
+            prior_sigma: None,
+            reference: 0.0,
+            initial: 0.0,
+        }
+    }
+
+    /// A world-frame force component at the end of `section`, otherwise defaults.
+    pub fn force(section: usize, axis: Axis) -> Self {
+        Self {
+            section: Some(section),
+            axis: Some(axis),
+            ..Self::new(UnknownKind::Force)
+        }
+    }
+
     /// Display name.
     pub fn display_name(&self) -> String {
         if let Some(n) = &self.name {

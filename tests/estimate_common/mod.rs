@@ -94,19 +94,7 @@ pub fn two_section_robot() -> Robot {
 // Unknowns.
 
 fn unknown(kind: UnknownKind) -> UnknownSpec {
-    UnknownSpec {
-        kind,
-        section: None,
-        axis: None,
-        cable: None,
-        name: None,
-        min: None,
-        max: None,
-        prior_mean: None,
-        prior_sigma: None,
-        reference: 0.0,
-        initial: 0.0,
-    }
+    UnknownSpec::new(kind)
 }
 
 /// World-frame force component at the end of `section`.

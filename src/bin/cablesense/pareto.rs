@@ -9,7 +9,7 @@
 
 use crate::progress;
 use anyhow::Context;
-use cablesense::estimate::{Axis, EstimateSpec, Estimator, UnknownKind, UnknownSpec};
+use cablesense::estimate::{Axis, EstimateSpec, Estimator, UnknownSpec};
 use cablesense::ladder::{self, ForwardModel, Rung};
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{TableData, ThesisTable};
@@ -220,19 +220,7 @@ fn estimator_ticks(
     let tip = robot.sections().len() - 1;
     let spec = EstimateSpec::new(
         axes.iter()
-            .map(|&a| UnknownSpec {
-                kind: UnknownKind::Force,
-                section: Some(tip),
-                axis: Some([Axis::X, Axis::Y, Axis::Z][a]),
-                cable: None,
-                name: None,
-                min: None,
-                max: None,
-                prior_mean: None,
-                prior_sigma: None,
-                reference: 0.0,
-                initial: 0.0,
-            })
+            .map(|&a| UnknownSpec::force(tip, [Axis::X, Axis::Y, Axis::Z][a]))
             .collect(),
     );
     let mut est = match Estimator::on_rung(robot.clone(), scene.loads.clone(), rung, spec) {

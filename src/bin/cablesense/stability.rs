@@ -19,9 +19,7 @@
 use crate::pareto::across;
 use crate::progress;
 use anyhow::Context;
-use cablesense::estimate::{
-    Axis, EstimateSpec, EstimateStatus, Estimator, Method, UnknownKind, UnknownSpec,
-};
+use cablesense::estimate::{Axis, EstimateSpec, EstimateStatus, Estimator, Method, UnknownSpec};
 use cablesense::ladder::{CcSettings, ForwardModel, PccSettings, Rung};
 use cablesense::nalgebra::Vector3;
 use cablesense::{
@@ -405,19 +403,7 @@ fn estimate_map(
         let tip = robot.sections().len() - 1;
         let mut spec = EstimateSpec::new(
             axes.iter()
-                .map(|&a| UnknownSpec {
-                    kind: UnknownKind::Force,
-                    section: Some(tip),
-                    axis: Some([Axis::X, Axis::Y, Axis::Z][a]),
-                    cable: None,
-                    name: None,
-                    min: None,
-                    max: None,
-                    prior_mean: None,
-                    prior_sigma: None,
-                    reference: 0.0,
-                    initial: 0.0,
-                })
+                .map(|&a| UnknownSpec::force(tip, [Axis::X, Axis::Y, Axis::Z][a]))
                 .collect(),
         );
         spec.method = method;
