@@ -7,7 +7,7 @@
 //! it reads the workspace's private buffers without widening their visibility; it
 //! adds methods only and changes none of the forward solver.
 
-use super::{max_abs, sweep, SolveStatus, Wide, Workspace};
+use super::{max_abs, sweep, wide_sweeps, SolveStatus, Wide, Workspace};
 use crate::math::Dual;
 
 /// Cumulative integration counts of one workspace (all solves and sweeps so far).
@@ -77,21 +77,7 @@ impl Workspace {
             return false;
         }
         let (plan, b64) = (&self.plan, &mut self.b64);
-        let p = plan.params.len();
-        let ok = with_wide!(&mut self.wide, b => {
-            b.next.clone_from(&b64.next);
-            let ok = (0..w)
-                .step_by(6)
-                .all(|c0| sweep(plan, x, c0, true, b, jac_s, jac_m, 1.0));
-            for k in 0..p {
-                b.theta[k] = Dual::constant(b64.theta[k]);
-            }
-            if ok && b.mlin_valid {
-                b64.mlin.clone_from(&b.mlin);
-                b64.mlin_valid = true;
-            }
-            ok
-        }, false);
+        let ok = with_wide!(&mut self.wide, b => wide_sweeps(plan, x, w, true, b, b64, jac_s, jac_m, 1.0), false);
         if x != self.x.as_slice() {
             self.eval_at(false, 1.0);
         }

@@ -276,7 +276,6 @@ impl Workspace {
             let v = self.b64.theta[k];
             self.b3.theta[k] = Dual::constant(v);
             self.b6.theta[k] = Dual::constant(v);
-            with_wide!(&mut self.wide, b => b.theta[k] = Dual::constant(v));
         }
         if !ok {
             return false;
@@ -407,17 +406,7 @@ impl Workspace {
         } else {
             (self.lu.matrix_mut(), &mut [][..])
         };
-        with_wide!(&mut self.wide, b => {
-            b.next.clone_from(&b64.next);
-            let ok = (0..w).step_by(6).all(|c0| {
-                sweep(plan, x, c0, with_theta, b, jac_s, jac_m, lam)
-            });
-            if ok && b.mlin_valid {
-                b64.mlin.clone_from(&b.mlin);
-                b64.mlin_valid = true;
-            }
-            ok
-        }, false)
+        with_wide!(&mut self.wide, b => wide_sweeps(plan, x, w, with_theta, b, b64, jac_s, jac_m, lam), false)
     }
 
     /// Straight-rod reactions as the starting point, loads scaled by `lam`.
@@ -869,6 +858,35 @@ fn sweep<const N: usize>(
         }
     }
     true
+}
+
+/// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer directions
+/// from the next-hole positions `b64` settled at `x`; hands the segments' matrices `M`
+/// back to `b64` and returns the seeded `theta` to constants. `false` if a pass failed.
+#[allow(clippy::too_many_arguments)]
+fn wide_sweeps<const N: usize>(
+    plan: &Plan,
+    x: &[f64],
+    w: usize,
+    with_theta: bool,
+    b: &mut PassBuf<Dual<N>>,
+    b64: &mut PassBuf<f64>,
+    jac_s: &mut [f64],
+    jac_m: &mut [f64],
+    lam: f64,
+) -> bool {
+    b.next.clone_from(&b64.next);
+    let ok = (0..w)
+        .step_by(6)
+        .all(|c0| sweep(plan, x, c0, with_theta, b, jac_s, jac_m, lam));
+    for (t, v) in b.theta.iter_mut().zip(&b64.theta) {
+        *t = Dual::constant(*v);
+    }
+    if ok && b.mlin_valid {
+        b64.mlin.clone_from(&b.mlin);
+        b64.mlin_valid = true;
+    }
+    ok
 }
 
 fn max_abs(v: &[f64]) -> f64 {
