@@ -73,6 +73,23 @@ impl DenseLu {
         Some(if n == 0 { 1.0 } else { pmin / pmax })
     }
 
+    /// Sign of `det A` (+1 or -1) from the last successful factorisation: the signs of
+    /// the pivots times the parity of the row swaps. Continuation uses it to notice a
+    /// fold or bifurcation (the determinant changes sign there).
+    pub fn det_sign(&self) -> f64 {
+        let n = self.n;
+        let mut sign = 1.0;
+        for k in 0..n {
+            if self.piv[k] != k {
+                sign = -sign;
+            }
+            if self.a[k * n + k] < 0.0 {
+                sign = -sign;
+            }
+        }
+        sign
+    }
+
     /// Solve `A x = b` in place (`b` becomes `x`) with the last factorisation.
     pub fn solve_in_place(&self, b: &mut [f64]) {
         let n = self.n;
@@ -112,6 +129,16 @@ mod tests {
         for (x, e) in b.iter().zip([1.0, 2.0, 1.0]) {
             assert!((x - e).abs() < 1e-14, "{b:?}");
         }
+        // det = -5 (cofactors along the first row), with two row swaps on the way
+        assert_eq!(lu.det_sign(), -1.0);
+        lu.matrix_mut()
+            .copy_from_slice(&[0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 2.0]);
+        assert!(lu.factor().is_some());
+        assert_eq!(lu.det_sign(), -1.0, "one swap, positive pivots");
+        lu.matrix_mut()
+            .copy_from_slice(&[2.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -3.0]);
+        assert!(lu.factor().is_some());
+        assert_eq!(lu.det_sign(), 1.0, "two negative pivots");
     }
 
     #[test]
