@@ -170,6 +170,9 @@ impl JointEstimator {
         } else {
             EstimateStatus::NoData
         };
+        if est.status == EstimateStatus::Converged && !est.explains_data() {
+            est.status = EstimateStatus::Stalled;
+        }
         est.finish();
         est.elapsed = t0.elapsed().as_secs_f64();
         est.status
@@ -657,10 +660,13 @@ fn conclude(
     est: &mut Estimator,
     st: &mut JointState,
     status: EstimateStatus,
-    ws_current: bool,
+    _ws_current: bool,
 ) -> EstimateStatus {
     est.ws.set_theta(&est.theta);
-    est.ws.adopt_unknowns(&st.x, !ws_current);
+    // always a fresh pass: the cable lengths (hence `len`, `cost`, the residuals and
+    // the data check) come from the pass's recording, which the joint sweeps do not
+    // refresh (it held the reference shape's lengths: found by the data check)
+    est.ws.adopt_unknowns(&st.x, true);
     let status = if status == EstimateStatus::Converged {
         status
     } else if est.ws.solve(Start::Warm).status.is_converged() {

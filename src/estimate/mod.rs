@@ -397,9 +397,29 @@ impl<M: EstimationModel> Estimator<M> {
         } else {
             self.run_workspace(t0)
         };
+        if self.status == EstimateStatus::Converged && !self.explains_data() {
+            self.status = EstimateStatus::Stalled;
+        }
         self.finish();
         self.elapsed = t0.elapsed().as_secs_f64();
         self.status
+    }
+
+    /// Whether the residual is consistent with the noise: RMS of `r_j / sigma_j` over
+    /// the measured cables at most `spec.max_rms_sigma`. A stationary point that
+    /// leaves hundreds of sigma unexplained is a local minimum of the cost (seen past
+    /// `PL^2/EI` ~ 20, where the cable lengths stop singling out the force) or data
+    /// the model cannot produce: `stalled`, not `converged`.
+    pub(crate) fn explains_data(&self) -> bool {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for j in 0..self.c {
+            if self.wts[j] > 0.0 {
+                let r = self.len[j] - self.ref_len[j] - self.meas[j];
+                sum += self.wts[j] * r * r;
+                count += 1;
+            }
+        }
+        count == 0 || (sum / count as f64).sqrt() <= self.spec.max_rms_sigma
     }
 
     /// Store a sample: finite changes with a finite positive sigma get weight

@@ -182,6 +182,12 @@ pub struct EstimateSpec {
     /// order. `false` recomputes them every iteration.
     #[serde(default = "default_true")]
     pub reuse_jacobian: bool,
+    /// Largest RMS of the weighted cable residuals `r_j / sigma_j` a `converged`
+    /// estimate may leave (default 50): beyond it the stationary point does not
+    /// explain the data (a local minimum, or data the model cannot produce) and the
+    /// status is `stalled`. Raise it for data with known model mismatch.
+    #[serde(default = "default_max_rms_sigma")]
+    pub max_rms_sigma: f64,
 }
 
 fn default_noise() -> f64 {
@@ -195,6 +201,9 @@ fn default_tol() -> f64 {
 }
 fn default_rank_tol() -> f64 {
     1e-8
+}
+fn default_max_rms_sigma() -> f64 {
+    50.0
 }
 fn default_true() -> bool {
     true
@@ -213,6 +222,7 @@ impl EstimateSpec {
             tolerance: default_tol(),
             rank_tolerance: default_rank_tol(),
             reuse_jacobian: true,
+            max_rms_sigma: default_max_rms_sigma(),
         }
     }
 
@@ -225,6 +235,7 @@ impl EstimateSpec {
             });
         }
         ModelError::positive("estimate.noise_m", self.noise_m)?;
+        ModelError::positive("estimate.max_rms_sigma", self.max_rms_sigma)?;
         if self.max_iterations == 0 || self.max_iterations > 10_000 {
             return Err(ModelError::OutOfRange {
                 field: "estimate.max_iterations".into(),
