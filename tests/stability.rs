@@ -12,7 +12,8 @@ use cablesense::estimate::{EstimateStatus, Estimator, Method};
 use cablesense::ladder::{CcSettings, PccSettings, Rung};
 use cablesense::nalgebra::Vector3;
 use cablesense::{
-    GuideMass, Integrator, Loads, PointLoad, Robot, RodModel, Scene, SolverSettings, Start,
+    Frame, GuideMass, Integrator, Loads, PointLoad, Robot, RodModel, Scene, SolverSettings, Start,
+    Workspace,
 };
 use std::time::Instant;
 
@@ -23,6 +24,9 @@ enum Dir {
     Lateral,
     Axial,
     Tension,
+    /// Body-frame (follower) tip force along the tip's local x or y axis.
+    FollowerX,
+    FollowerY,
 }
 
 fn scene() -> Scene {
@@ -36,6 +40,17 @@ fn loads_at(robot: &Robot, base: &Loads, dir: Dir, magnitude: f64) -> Loads {
     if dir == Dir::Tension {
         let r = robot.cables()[0].base_hole.norm();
         out.tensions_n = vec![magnitude * ei / (r * l)];
+        return out;
+    }
+    if let Dir::FollowerX | Dir::FollowerY = dir {
+        let mut f = [0.0; 3];
+        f[(dir == Dir::FollowerY) as usize] = magnitude * ei / (l * l);
+        out.point.push(PointLoad {
+            section: 0,
+            force_n: f,
+            frame: Frame::Body,
+            ..Default::default()
+        });
         return out;
     }
     let t = robot.base_rotation() * Vector3::z();
@@ -67,6 +82,21 @@ fn rod(model: RodModel, steps: usize, continuation: bool) -> Rung {
     })
 }
 
+/// The reference tracker: warm steps only, no branch guard (so the reference does not
+/// rely on what it checks).
+fn tracker(model: RodModel) -> Rung {
+    Rung::Rod(SolverSettings {
+        rod_model: model,
+        guide_mass: GuideMass::Point,
+        integrator: Integrator::Rk4 {
+            steps_per_section: 32,
+        },
+        continuation: false,
+        branch_guard: false,
+        ..SolverSettings::default()
+    })
+}
+
 /// Tips (and cable lengths) on the physical branch at each magnitude of `grid`.
 fn track(
     rung: &Rung,
@@ -75,7 +105,11 @@ fn track(
     dir: Dir,
     grid: &[f64],
 ) -> Vec<(Vector3<f64>, Vec<f64>)> {
-    let h = if dir == Dir::Tension { 0.02 } else { 0.1 };
+    let h = match dir {
+        Dir::Tension => 0.02,
+        Dir::FollowerX | Dir::FollowerY => 0.05,
+        _ => 0.1,
+    };
     let mut m = rung.build(robot).unwrap();
     assert!(m
         .solve(&loads_at(robot, base, dir, 0.0), Start::Cold)
@@ -107,16 +141,18 @@ fn rod_shooting_converges_to_the_physical_branch_inside_the_documented_region() 
     let sc = scene();
     let robot = sc.build_robot().unwrap();
     // default cold solve (4 Newton iterations, then load continuation)
-    let region: [(Dir, &[f64]); 5] = [
+    let region: [(Dir, &[f64]); 7] = [
         (Dir::Down, &[1.0, 3.0, 5.0, 10.0, 20.0]),
         (Dir::Up, &[1.0, 3.0, 5.0, 10.0, 20.0]),
         (Dir::Lateral, &[1.0, 5.0, 10.0, 15.0, 30.0]),
         (Dir::Axial, &[1.0, 2.0, 3.0]),
-        (Dir::Tension, &[1.0, 2.0, 3.0, 4.0, 6.0]),
+        (Dir::Tension, &[1.0, 2.0, 3.0, 4.0, 6.0, 7.0, 7.5]),
+        (Dir::FollowerX, &[1.0, 5.0, 10.0, 20.0, 30.0]),
+        (Dir::FollowerY, &[1.0, 5.0, 10.0, 20.0, 30.0]),
     ];
     for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
         let rung = rod(model, 32, true);
-        let tracker = rod(model, 32, false);
+        let tracker = tracker(model);
         for (dir, grid) in region {
             let truth = track(&tracker, &robot, &sc.loads, dir, grid);
             let mut m = rung.build(&robot).unwrap();
@@ -156,13 +192,7 @@ fn pcc_with_its_continuation_stays_on_the_branch_to_fifty() {
     let l = robot.length();
     for dir in [Dir::Down, Dir::Up, Dir::Lateral] {
         let grid = [5.0, 20.0, 50.0];
-        let truth = track(
-            &rod(RodModel::Kirchhoff, 32, false),
-            &robot,
-            &sc.loads,
-            dir,
-            &grid,
-        );
+        let truth = track(&tracker(RodModel::Kirchhoff), &robot, &sc.loads, dir, &grid);
         let mut m = pcc.build(&robot).unwrap();
         for (g, (tip, _)) in grid.iter().zip(&truth) {
             let rep = m
@@ -191,6 +221,7 @@ fn estimator(sc: &Scene, robot: &Robot, method: Method) -> Estimator {
 fn measurements(sc: &Scene, robot: &Robot, dir: Dir, grid: &[f64]) -> Vec<(Vec<f64>, [f64; 2])> {
     let model = Rung::Rod(SolverSettings {
         continuation: false,
+        branch_guard: false,
         ..sc.numerics.clone()
     });
     let zero = track(&model, robot, &sc.loads, dir, &[0.0]);
@@ -248,7 +279,7 @@ fn outside_the_region_methods_return_a_failure_status() {
     // the branch guard (Jacobi's condition) turns those into `Unstable`, so every start
     // either converges onto the tracked branch or returns a failure status
     for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
-        let tracker = rod(model, 32, false);
+        let tracker = tracker(model);
         for dir in [Dir::Down, Dir::Up, Dir::Lateral] {
             let grid = [15.0, 20.0, 30.0, 40.0, 50.0];
             let truth = track(&tracker, &robot, &sc.loads, dir, &grid);
@@ -268,20 +299,39 @@ fn outside_the_region_methods_return_a_failure_status() {
             }
         }
     }
-    // estimation past PL^2/EI = 20: the cable lengths no longer single out the force
+    // estimation past PL^2/EI = 15-20: the cost has local minima (the cable lengths
+    // stop singling out the force); a method stopping at one leaves hundreds of sigma
+    // unexplained and returns `stalled` (spec.max_rms_sigma), so `converged` is right
+    let ei = robot.sections()[0].stiffness.bend_twist.x;
+    let fscale = ei / robot.length().powi(2);
+    let mut failures = 0;
     for dir in [Dir::Down, Dir::Lateral] {
-        let grid = [30.0, 50.0];
-        for (g, (ch, _)) in grid.iter().zip(measurements(&sc, &robot, dir, &grid)) {
+        let grid = [20.0, 30.0, 50.0];
+        for (g, (ch, truth)) in grid.iter().zip(measurements(&sc, &robot, dir, &grid)) {
             for method in METHODS {
                 let mut est = estimator(&sc, &robot, method);
                 let t0 = Instant::now();
                 let st = est.tick(&ch, None);
-                assert_ne!(st, EstimateStatus::Converged, "{method:?} {dir:?} {g}");
-                assert!(est.theta().iter().all(|x| x.is_finite()));
+                let th = est.theta();
+                assert!(th.iter().all(|x| x.is_finite()));
                 assert!(t0.elapsed().as_secs_f64() < 5.0);
+                if st == EstimateStatus::Converged {
+                    let err = ((th[0] - truth[0]).powi(2) + (th[1] - truth[1]).powi(2)).sqrt();
+                    assert!(
+                        err < 1e-4 * (fscale + truth[0].hypot(truth[1])),
+                        "{method:?} {dir:?} {g}: converged to {th:?}, truth {truth:?}"
+                    );
+                } else {
+                    failures += 1;
+                }
             }
         }
     }
+    // the region's edge is real: some of these do fail (8 of 24 when written)
+    assert!(
+        failures > 0,
+        "every estimate converged past the documented region"
+    );
 }
 
 #[test]
@@ -332,5 +382,140 @@ fn absurd_loads_and_data_never_panic_hang_or_give_nan() {
                 assert!(est.theta().iter().all(|x| x.is_finite()));
             }
         }
+    }
+}
+
+/// Cable tension past the region (the tracked branch folds at `T r L/EI` ~ 8.26 on the
+/// track demo) and warm jumps: every start either converges onto the tracked branch
+/// or returns a failure status. Before the branch-checked continuation, cold starts
+/// at 7-8 converged 3-50 % of L away from it (the base wrench alone does not fix the
+/// shape there: the chords' settled state does, and it jumped).
+#[test]
+fn cable_tension_past_the_region_stays_on_the_branch_or_fails() {
+    let sc = scene();
+    let robot = sc.build_robot().unwrap();
+    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
+        let grid = [7.0, 7.5, 8.0, 8.2];
+        let truth = track(&tracker(model), &robot, &sc.loads, Dir::Tension, &grid);
+        // past the fold there is no branch from rest: [8.5, 9, 10, 12] must fail
+        let cases = grid
+            .iter()
+            .map(|g| (*g, truth_tip(&truth, &grid, *g)))
+            .chain([8.5, 9.0, 10.0, 12.0].map(|g| (g, None)));
+        for (g, tip) in cases {
+            let loads = loads_at(&robot, &sc.loads, Dir::Tension, g);
+            for start in [
+                "cold",
+                "cold, no continuation",
+                "warm from 0",
+                "warm from 6",
+            ] {
+                let mut m = rod(model, 32, start != "cold, no continuation")
+                    .build(&robot)
+                    .unwrap();
+                if start.starts_with("warm") {
+                    let from = if start == "warm from 0" { 0.0 } else { 6.0 };
+                    let rep = m
+                        .solve(
+                            &loads_at(&robot, &sc.loads, Dir::Tension, from),
+                            Start::Cold,
+                        )
+                        .unwrap();
+                    assert!(rep.status.is_converged(), "{model:?} at {from}: {rep:?}");
+                }
+                let t0 = Instant::now();
+                let rep = m
+                    .solve(
+                        &loads,
+                        if start.starts_with("warm") {
+                            Start::Warm
+                        } else {
+                            Start::Cold
+                        },
+                    )
+                    .unwrap();
+                assert!(t0.elapsed().as_secs_f64() < 5.0, "{model:?} {g} {start}");
+                assert!(m.tip_position().iter().all(|x| x.is_finite()));
+                match (rep.status.is_converged(), tip) {
+                    (true, Some(tip)) => {
+                        let d = (m.tip_position() - tip).norm();
+                        assert!(d < 1e-6, "{model:?} {g} {start}: converged {d:e} m off");
+                    }
+                    (true, None) => panic!("{model:?} {g} {start}: converged past the fold"),
+                    (false, _) => {}
+                }
+            }
+        }
+    }
+}
+
+fn truth_tip(truth: &[(Vector3<f64>, Vec<f64>)], grid: &[f64], g: f64) -> Option<Vector3<f64>> {
+    grid.iter().position(|x| *x == g).map(|i| truth[i].0)
+}
+
+/// Warm solves that jump far under world-fixed loads (the estimator's trial steps do)
+/// converge on the tracked branch or fail: a large warm step gets Jacobi's test, and a
+/// Newton that went elsewhere than its tangent step pointed is redone cold.
+#[test]
+fn large_warm_jumps_stay_on_the_branch_or_fail() {
+    let sc = scene();
+    let robot = sc.build_robot().unwrap();
+    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
+        for dir in [Dir::Down, Dir::Up, Dir::Lateral, Dir::FollowerX] {
+            let grid = [10.0, 20.0, 30.0];
+            let truth = track(&tracker(model), &robot, &sc.loads, dir, &grid);
+            for (g, (tip, _)) in grid.iter().zip(&truth) {
+                for from in [0.0, 5.0] {
+                    let mut m = rod(model, 32, true).build(&robot).unwrap();
+                    let rep = m
+                        .solve(&loads_at(&robot, &sc.loads, dir, from), Start::Cold)
+                        .unwrap();
+                    assert!(rep.status.is_converged(), "{model:?} {dir:?} at {from}");
+                    let rep = m
+                        .solve(&loads_at(&robot, &sc.loads, dir, *g), Start::Warm)
+                        .unwrap();
+                    if rep.status.is_converged() {
+                        let d = (m.tip_position() - tip).norm();
+                        assert!(d < 1e-6, "{model:?} {dir:?} {from}->{g}: {d:e} m off");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The load intensity that decides when a cold solve is branch-checked is the map's
+/// non-dimensional load: `P L^2/EI` for a tip force, `T r L/EI` for a cable ending at
+/// the tip, plus the weights.
+#[test]
+fn load_intensity_matches_the_maps_units() {
+    let sc = scene();
+    let robot = sc.build_robot().unwrap();
+    let none = Loads::none();
+    let base = Workspace::new(robot.clone(), none.clone(), SolverSettings::default())
+        .unwrap()
+        .load_intensity();
+    assert_eq!(base, 0.0);
+    let gravity = Workspace::new(robot.clone(), sc.loads.clone(), SolverSettings::default())
+        .unwrap()
+        .load_intensity();
+    assert!(gravity > 0.0);
+    for dir in [Dir::Down, Dir::Lateral, Dir::Tension, Dir::FollowerX] {
+        let loads = loads_at(&robot, &sc.loads, dir, 4.0);
+        let k = Workspace::new(robot.clone(), loads, SolverSettings::default())
+            .unwrap()
+            .load_intensity();
+        // a cable acts up to its termination disk, a little short of the tip
+        let c = &robot.cables()[0];
+        let s_end = robot.guides()[*c.route.last().unwrap()].s;
+        let want = if dir == Dir::Tension {
+            4.0 * s_end / robot.length()
+        } else {
+            4.0
+        };
+        assert!(
+            (k - gravity - want).abs() < 1e-9,
+            "{dir:?}: {k} vs {gravity} + {want}"
+        );
     }
 }

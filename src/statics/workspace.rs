@@ -1,6 +1,7 @@
 //! The reusable solver workspace: buffers sized once per plan, Newton with an exact
 //! dual-number Jacobian, backtracking line search, warm starts, load continuation.
 
+use super::intensity::load_intensity;
 use super::pass::{pass, PassBuf, Recording, LOCAL_TOL};
 use super::plan::{ParamSite, Plan};
 use super::{GuidePose, Solution, SolveReport, SolveStatus};
@@ -35,6 +36,26 @@ const COLD_BUDGET: usize = 4;
 /// Newton iterations per continuation step.
 const CONTINUATION_BUDGET: usize = 10;
 
+/// Load intensity (see `intensity.rs`) above which a cold solve under loads outside
+/// Jacobi's test (tensioned cables, body-frame loads) is a branch-checked load
+/// continuation from the unloaded rod instead of a Newton from the straight rod. On the
+/// track demo a cold Newton lands on the continued branch up to 6 and on other
+/// equilibria from 7 (README "Where methods fail"): half of 6, for margin.
+pub const CERTIFY_INTENSITY: f64 = 3.0;
+/// Largest load-intensity increment of one step of the branch-checked continuation.
+const CERTIFY_STEP: f64 = 2.0;
+/// A branch-checked continuation step is rejected (and halved) when the corrector
+/// moves the unknowns more than this fraction of the secant predictor's own move.
+const CORRECTOR_RATIO: f64 = 0.5;
+/// A warm solve has left its branch when, after the first step `d1`, Newton still moved
+/// the unknowns by more than `WARM_JUMP_RATIO |d1| + WARM_JUMP_FLOOR` (scaled units,
+/// max norm): its tangent step no longer described where it went.
+const WARM_JUMP_RATIO: f64 = 1.0;
+const WARM_JUMP_FLOOR: f64 = 1e-3;
+/// A warm solve under world-fixed loads that moved the unknowns (scaled) or the tip
+/// (in units of L) by more than this also gets Jacobi's test.
+const WARM_CHECK_STEP: f64 = 0.05;
+
 /// A reused (chord) Jacobian's full step must shrink `||r||_2` by this factor.
 const CHORD_CONTRACTION: f64 = 0.1;
 /// Chord steps allowed per Jacobian before it is refreshed anyway.
@@ -68,6 +89,22 @@ pub struct Workspace {
     /// Lowest-residual iterate at full load during the current solve.
     x_best: Vec<f64>,
     best_res: f64,
+    /// Continuation: the last two converged points.
+    x_ok: Vec<f64>,
+    x_prev: Vec<f64>,
+    /// Warm solve: the start and the point after the first accepted Newton step.
+    x_start: Vec<f64>,
+    x_first: Vec<f64>,
+    first_taken: bool,
+    /// Checked continuation: tangent at the last converged point, and the tip (m) and
+    /// its tangent there (the tip is checked too: with tensioned cables the base
+    /// wrench alone does not fix the shape, the chords' settled state does).
+    x_tan: Vec<f64>,
+    tip_ok: Vector3<f64>,
+    tip_tan: Vector3<f64>,
+    /// Warm solve: tip at the start and after the first accepted step.
+    tip_start: Vector3<f64>,
+    tip_first: Vector3<f64>,
     dx: Vec<f64>,
     res: Vec<f64>,
     lu: DenseLu,
@@ -126,6 +163,16 @@ impl Workspace {
             x_trial: vec![0.0; n],
             x_best: vec![0.0; n],
             best_res: f64::INFINITY,
+            x_ok: vec![0.0; n],
+            x_prev: vec![0.0; n],
+            x_start: vec![0.0; n],
+            x_first: vec![0.0; n],
+            first_taken: false,
+            x_tan: vec![0.0; n],
+            tip_ok: Vector3::zeros(),
+            tip_tan: Vector3::zeros(),
+            tip_start: Vector3::zeros(),
+            tip_first: Vector3::zeros(),
             dx: vec![0.0; n],
             res: vec![0.0; n],
             lu: DenseLu::new(n),
@@ -324,41 +371,38 @@ impl Workspace {
     }
 
     /// Solve in place. Never panics; the status says whether the result is usable.
+    ///
+    /// With `branch_guard` (default) a `converged` status also means "on the branch
+    /// reached by loading the unloaded rod quasi-statically" (cold) or "on the branch
+    /// of the previous solution" (warm), as far as the guard can tell: Jacobi's
+    /// condition for world-fixed loads, a branch-checked load continuation for other
+    /// loads above [`CERTIFY_INTENSITY`], and for warm solves a check that Newton went
+    /// where its first (tangent) step pointed, else a checked cold solve.
     pub fn solve(&mut self, start: Start) -> SolveReport {
         let rhs0 = self.rhs_count();
         self.jac_evals = 0;
-        let mut iterations = 0;
-        let mut continuation_steps = 0;
         self.best_res = f64::INFINITY;
         let warm = start == Start::Warm && self.has_solution;
-        if !warm {
-            self.cold_guess(1.0);
-            self.lu_valid = false;
+        let (mut status, mut iterations, mut continuation_steps) = (SolveStatus::NonFinite, 0, 0);
+        let mut cold = !warm;
+        if warm {
+            self.x_start.copy_from_slice(&self.x);
+            self.b64.local_tol = LOCAL_TOL;
+            (status, iterations) = self.newton(1.0, self.settings.max_iterations);
+            // branch guard, warm: a solve its tangent step did not describe may have
+            // jumped to another equilibrium; answer as a cold (checked) solve would
+            if status.is_converged() && self.settings.branch_guard && self.left_branch_checked() {
+                cold = true;
+                self.best_res = f64::INFINITY;
+            }
+            // a failed warm start falls back like a failed cold one
+            cold |= !status.is_converged() && self.settings.continuation;
         }
-        // A cold Newton from the straight rod is cut short (heavy damping means it is
-        // far from the basin); continuation with a secant predictor is then cheaper.
-        let budget = if warm || !self.settings.continuation {
-            self.settings.max_iterations
-        } else {
-            COLD_BUDGET.min(self.settings.max_iterations)
-        };
-        self.b64.local_tol = if warm { LOCAL_TOL } else { 1e-9 };
-        let (mut status, it) = self.newton(1.0, budget);
-        iterations += it;
-        // branch guard: a cold Newton can land on an unstable equilibrium (looped or
-        // inverted rod, seen from PL^2/EI ~ 5 on); continuation may still reach the
-        // stable one from the unloaded rod
-        if !warm && status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
-            status = SolveStatus::Unstable;
-        }
-        if !status.is_converged() && self.settings.continuation {
-            let (st, it, steps) = self.continuation();
+        if cold {
+            let (st, it, steps) = self.solve_cold();
             status = st;
             iterations += it;
             continuation_steps = steps;
-            if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
-                status = SolveStatus::Unstable;
-            }
         }
         if !status.is_converged() && self.best_res < max_abs(&self.res) {
             // hand back the best full-load iterate, not a partial-load point
@@ -381,6 +425,81 @@ impl Workspace {
             unknowns: self.plan.n_unknowns,
         };
         self.report
+    }
+
+    /// Cold solve: Newton from the straight rod (with Jacobi's test and continuation
+    /// as fallback), or, for loads outside Jacobi's test above [`CERTIFY_INTENSITY`],
+    /// the branch-checked continuation directly.
+    fn solve_cold(&mut self) -> (SolveStatus, usize, usize) {
+        self.cold_guess(1.0);
+        self.lu_valid = false;
+        self.b64.local_tol = 1e-9;
+        if self.settings.branch_guard
+            && !self.guarded()
+            && self.load_intensity() > CERTIFY_INTENSITY
+        {
+            return self.checked_continuation();
+        }
+        // A cold Newton from the straight rod is cut short (heavy damping means it is
+        // far from the basin); continuation with a secant predictor is then cheaper.
+        let budget = if self.settings.continuation {
+            COLD_BUDGET.min(self.settings.max_iterations)
+        } else {
+            self.settings.max_iterations
+        };
+        let (mut status, mut iterations) = self.newton(1.0, budget);
+        let mut steps = 0;
+        // branch guard: a cold Newton can land on an unstable equilibrium (looped or
+        // inverted rod, seen from PL^2/EI ~ 5 on); continuation may still reach the
+        // stable one from the unloaded rod
+        if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
+            status = SolveStatus::Unstable;
+        }
+        if !status.is_converged() && self.settings.continuation {
+            let (st, it, s) = self.continuation();
+            status = st;
+            iterations += it;
+            steps = s;
+            if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
+                status = SolveStatus::Unstable;
+            }
+        }
+        (status, iterations, steps)
+    }
+
+    /// Warm solve left its branch: after the first accepted step `d1`, Newton moved
+    /// the unknowns by more than `WARM_JUMP_RATIO |d1| + WARM_JUMP_FLOOR` (max norm).
+    fn left_branch(&self) -> bool {
+        if !self.first_taken {
+            return false;
+        }
+        let d1 = max_abs_diff(&self.x_first, &self.x_start);
+        let rest = max_abs_diff(&self.x, &self.x_first);
+        let t1 = (self.tip_first - self.tip_start).norm() / self.plan.length;
+        let trest = (self.tip - self.tip_first).norm() / self.plan.length;
+        rest > WARM_JUMP_RATIO * d1 + WARM_JUMP_FLOOR
+            || trest > WARM_JUMP_RATIO * t1 + WARM_JUMP_FLOOR
+    }
+
+    /// [`Workspace::left_branch`], and for a large step under world-fixed loads also
+    /// Jacobi's test (one `Dual<3>` sweep, only then: the control loop's small steps
+    /// do not pay for it).
+    fn left_branch_checked(&mut self) -> bool {
+        if self.left_branch() {
+            return true;
+        }
+        let step = max_abs_diff(&self.x, &self.x_start);
+        let moved = (self.tip - self.tip_start).norm() / self.plan.length;
+        self.guarded()
+            && (step > WARM_CHECK_STEP || moved > WARM_CHECK_STEP)
+            && self.conjugate_point().is_some()
+    }
+
+    /// Non-dimensional intensity of the current loads and load parameters (the sum of
+    /// the bending angles each would cause alone: `P s^2/EI`, `M s/EI`, `T r s/EI`,
+    /// weights like forces; see the `intensity` module).
+    pub fn load_intensity(&self) -> f64 {
+        load_intensity(&self.robot, &self.loads, &self.plan.params, &self.b64.theta)
     }
 
     fn rhs_count(&self) -> u64 {
@@ -513,10 +632,12 @@ impl Workspace {
     /// `||r||_2`; a stale one that does not contract is discarded and refreshed.
     fn newton(&mut self, lam: f64, max_iterations: usize) -> (SolveStatus, usize) {
         let n = self.plan.n_unknowns;
+        self.first_taken = false;
         if !self.eval_at(false, lam) {
             self.res.iter_mut().for_each(|r| *r = f64::INFINITY);
             return (SolveStatus::NonFinite, 0);
         }
+        self.tip_start = self.tip;
         let mut it = 0;
         let mut jacobians = 0;
         let mut chord_steps = 0;
@@ -571,6 +692,7 @@ impl Workspace {
                 if self.eval_trial(lam) && norm2(&self.b64.res) < CHORD_CONTRACTION * f0 {
                     std::mem::swap(&mut self.x, &mut self.x_trial);
                     self.res.copy_from_slice(&self.b64.res);
+                    self.note_first_step();
                 } else {
                     self.lu_valid = false;
                 }
@@ -595,6 +717,7 @@ impl Workspace {
             }
             std::mem::swap(&mut self.x, &mut self.x_trial);
             self.res.copy_from_slice(&self.b64.res);
+            self.note_first_step();
             if alpha < 1.0 {
                 // far from the solution: the Jacobian changes quickly, do not reuse it
                 self.lu_valid = false;
@@ -616,6 +739,15 @@ impl Workspace {
         }
     }
 
+    /// Remember the point after the first accepted Newton step (warm branch check).
+    fn note_first_step(&mut self) {
+        if !self.first_taken {
+            self.first_taken = true;
+            self.x_first.copy_from_slice(&self.x);
+            self.tip_first = self.tip;
+        }
+    }
+
     /// Natural-parameter continuation in the load scale from the unloaded rod, with a
     /// secant predictor from the last two converged load levels.
     fn continuation(&mut self) -> (SolveStatus, usize, usize) {
@@ -625,8 +757,8 @@ impl Workspace {
         let mut steps = 0;
         self.cold_guess(0.0);
         self.lu_valid = false;
-        let mut x_ok = self.x.clone();
-        let mut x_prev = self.x.clone();
+        self.x_ok.copy_from_slice(&self.x);
+        self.x_prev.copy_from_slice(&self.x);
         let mut lam_prev: f64 = 0.0;
         let per_step = self.settings.max_iterations.min(CONTINUATION_BUDGET);
         while steps < self.settings.max_continuation_steps {
@@ -634,17 +766,17 @@ impl Workspace {
             if lam > lam_prev {
                 let k = (target - lam) / (lam - lam_prev);
                 for i in 0..self.x.len() {
-                    self.x[i] = x_ok[i] + k * (x_ok[i] - x_prev[i]);
+                    self.x[i] = self.x_ok[i] + k * (self.x_ok[i] - self.x_prev[i]);
                 }
             }
             let (st, it) = self.newton(target, per_step);
             iterations += it;
             steps += 1;
             if st.is_converged() {
-                x_prev.copy_from_slice(&x_ok);
+                self.x_prev.copy_from_slice(&self.x_ok);
                 lam_prev = lam;
                 lam = target;
-                x_ok.copy_from_slice(&self.x);
+                self.x_ok.copy_from_slice(&self.x);
                 if lam >= 1.0 {
                     return (SolveStatus::Converged, iterations, steps);
                 }
@@ -652,7 +784,7 @@ impl Workspace {
                     step *= 2.0;
                 }
             } else {
-                self.x.copy_from_slice(&x_ok);
+                self.x.copy_from_slice(&self.x_ok);
                 step *= 0.5;
                 if step < 1e-4 {
                     self.eval_at(false, 1.0);
@@ -660,9 +792,140 @@ impl Workspace {
                 }
             }
         }
-        self.x.copy_from_slice(&x_ok);
+        self.x.copy_from_slice(&self.x_ok);
         let (st, it) = self.newton(1.0, self.settings.max_iterations);
         (st, iterations + it, steps)
+    }
+
+    /// Branch-checked continuation (the branch guard for loads outside Jacobi's test):
+    /// tangent predictor, steps capped at [`CERTIFY_STEP`] of load intensity, and a
+    /// converged step is accepted only if
+    /// - the corrector moved the unknowns by at most [`CORRECTOR_RATIO`] of the
+    ///   predictor's own move (else it likely converged onto another branch), and
+    /// - the shooting Jacobian's determinant kept the sign it has at the unloaded rod
+    ///   (a sign change means the path passed a fold or bifurcation: past a fold the
+    ///   equilibrium is the unstable sibling of the branch).
+    ///
+    /// A rejected step is halved; below `1e-4` of the load scale (a fold of the
+    /// branch) the status is `stalled`, and running out of steps is `max_iterations`:
+    /// never a full-load Newton from a partial load.
+    fn checked_continuation(&mut self) -> (SolveStatus, usize, usize) {
+        let max_step = (CERTIFY_STEP / self.load_intensity()).min(1.0);
+        let mut step = max_step.min(0.25);
+        let (mut lam, mut iterations, mut steps) = (0.0f64, 0, 0);
+        let per_step = self.settings.max_iterations.min(CONTINUATION_BUDGET);
+        self.cold_guess(0.0);
+        let sign0 = match self.tangent(0.0) {
+            Ok(sign) => sign,
+            Err(st) => return (st, 0, 0),
+        };
+        self.x_ok.copy_from_slice(&self.x);
+        self.x_prev.copy_from_slice(&self.x_tan);
+        let mut last = SolveStatus::MaxIterations;
+        while steps < self.settings.max_continuation_steps {
+            let target = (lam + step).min(1.0);
+            let h = target - lam;
+            for i in 0..self.x.len() {
+                self.x[i] = self.x_ok[i] + h * self.x_prev[i];
+            }
+            let (st, it) = self.newton(target, per_step);
+            iterations += it;
+            steps += 1;
+            // corrector move over predictor move: O(h) on a smooth branch, O(1) after a
+            // jump to another one
+            let ratio = if st.is_converged() {
+                self.corrector_ratio(h)
+            } else {
+                f64::INFINITY
+            };
+            let accept = ratio <= CORRECTOR_RATIO && self.tangent(target) == Ok(sign0);
+            // next step from the ratio's linear growth in h, within [h/4, 2h]
+            let grow = (0.8 * CORRECTOR_RATIO / ratio).clamp(0.25, 2.0);
+            if accept {
+                lam = target;
+                self.x_ok.copy_from_slice(&self.x);
+                self.x_prev.copy_from_slice(&self.x_tan);
+                if lam >= 1.0 {
+                    return (SolveStatus::Converged, iterations, steps);
+                }
+                step = (h * grow).min(max_step);
+                continue;
+            }
+            last = if st.is_converged() {
+                SolveStatus::Stalled
+            } else {
+                st
+            };
+            self.x.copy_from_slice(&self.x_ok);
+            self.lu_valid = false;
+            step = h * grow.min(0.5);
+            if step < 1e-4 {
+                break;
+            }
+        }
+        self.x.copy_from_slice(&self.x_ok);
+        self.eval_at(false, 1.0);
+        let st = if step < 1e-4 {
+            last
+        } else {
+            SolveStatus::MaxIterations
+        };
+        (st, iterations, steps)
+    }
+
+    /// How far the corrector of a checked continuation step of size `h` (from `x_ok`
+    /// along the tangent in `x_prev`) moved, relative to the predictor's own move: the
+    /// larger of the ratios for the unknowns and for the tip.
+    fn corrector_ratio(&self, h: f64) -> f64 {
+        let (mut dp, mut dc) = (0.0f64, 0.0f64);
+        for i in 0..self.x.len() {
+            let d = h * self.x_prev[i];
+            dp = dp.max(d.abs());
+            dc = dc.max((self.x[i] - self.x_ok[i] - d).abs());
+        }
+        let tip_pred = self.tip_ok + self.tip_tan * h;
+        let (tp, tc) = ((self.tip_tan * h).norm(), (self.tip - tip_pred).norm());
+        (dc / (dp + 1e-9)).max(tc / (tp + 1e-9 * self.plan.length))
+    }
+
+    /// Tangent `dx/dlam = -J^-1 dr/dlam` of the equilibrium path at `x` (converged at
+    /// load scale `lam`) into `x_tan`, and the sign of `det J`: a fresh exact Jacobian
+    /// and a forward difference of the residual in `lam`. Leaves that Jacobian
+    /// factorised for the next corrector.
+    fn tangent(&mut self, lam: f64) -> Result<f64, SolveStatus> {
+        let n = self.plan.n_unknowns;
+        self.jac_evals += 1;
+        if !self.eval_at(false, lam) || !self.jacobian(lam) {
+            return Err(SolveStatus::NonFinite);
+        }
+        match self.lu.factor() {
+            Some(rc) if rc > 1e-14 => self.lu_valid = true,
+            _ => return Err(SolveStatus::IllConditioned),
+        }
+        self.dx.copy_from_slice(&self.res);
+        let eps = 1e-6;
+        if !self.eval_at(false, lam + eps) {
+            return Err(SolveStatus::NonFinite);
+        }
+        for i in 0..n {
+            self.x_tan[i] = -(self.res[i] - self.dx[i]) / eps;
+        }
+        self.lu.solve_in_place(&mut self.x_tan);
+        // the tip's tangent, by a pass from this point's settled chords
+        if !self.eval_at(false, lam) {
+            return Err(SolveStatus::NonFinite);
+        }
+        self.tip_ok = self.tip;
+        for i in 0..n {
+            self.x_trial[i] = self.x[i] + eps * self.x_tan[i];
+        }
+        if !self.eval_at(true, lam + eps) {
+            return Err(SolveStatus::NonFinite);
+        }
+        self.tip_tan = (self.tip - self.tip_ok) / eps;
+        // leave the pass state at `lam`
+        self.eval_at(false, lam);
+        Ok(self.lu.det_sign())
     }
 
     /// Whether cold solves get the branch guard: world-fixed (dead) loads and no
@@ -887,6 +1150,10 @@ fn wide_sweeps<const N: usize>(
         b64.mlin_valid = true;
     }
     ok
+}
+
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
 }
 
 fn max_abs(v: &[f64]) -> f64 {

@@ -1,0 +1,87 @@
+//! Non-dimensional load intensity: how far a scene's loads can bend the rod.
+//!
+//! Each load contributes the bending angle (rad) it would produce on its own at the
+//! stiffest-to-bend scale of the robot, `EI_min = min_i min(C_i[0], C_i[1])` (thesis
+//! eq. 2.12):
+//! - a force `F` at arc length `s`: `|F| s^2 / EI` (the map's `P L^2 / EI` at the tip);
+//! - a torque `M` at `s`: `|M| s / EI`;
+//! - a weight (payload, guide, rod element) at `s`: `m |g| s^2 / EI`, so the bare rod
+//!   contributes `rho A |g| L^3 / (3 EI)`;
+//! - a cable of tension `T` with its base hole at radius `r`, ending at `s_end`:
+//!   `T r s_end / EI` (the bending angle of the equivalent constant-curvature arc, the
+//!   map's `T r L / EI`).
+//!
+//! The intensity is the sum: an upper bound on the scale of the base moment times
+//! `L / EI`, hence on the total turning `int |u| ds` of any equilibrium of the
+//! clamped-free rod (its internal moment is the moment of the loads distal to `s`).
+//! Below a few radians every equilibrium is a mildly bent rod near the one Newton finds
+//! from the straight rod; above, looped or inverted equilibria exist too. The solver
+//! uses it to decide when a cold Newton's answer needs the branch check
+//! (`SolverSettings::branch_guard`).
+
+use super::plan::ParamSite;
+use crate::loads::Loads;
+use crate::robot::Robot;
+use nalgebra::Vector3;
+
+/// Intensity (dimensionless) of `loads` plus the load parameters `theta` at `params`
+/// (a parameter's magnitude is added to its site's, an upper bound).
+pub(crate) fn load_intensity(
+    robot: &Robot,
+    loads: &Loads,
+    params: &[ParamSite],
+    theta: &[f64],
+) -> f64 {
+    let ei = robot
+        .sections()
+        .iter()
+        .map(|s| s.stiffness.bend_twist.x.min(s.stiffness.bend_twist.y))
+        .fold(f64::INFINITY, f64::min);
+    if ei.is_nan() || ei <= 0.0 {
+        return f64::INFINITY;
+    }
+    let g = Vector3::from(loads.gravity_m_s2).norm();
+    let end = |section: usize| robot.sections().get(section).map_or(0.0, |s| s.end());
+    // weight of the bare rod, section by section: int rho A g s^2 ds
+    let mut sum: f64 = robot
+        .sections()
+        .iter()
+        .map(|s| {
+            let (a, b) = (s.start, s.end());
+            s.stiffness.linear_density * g * (b.powi(3) - a.powi(3)) / 3.0
+        })
+        .sum();
+    sum += robot
+        .guides()
+        .iter()
+        .map(|d| d.mass * g * d.s * d.s)
+        .sum::<f64>();
+    for p in &loads.point {
+        let s = end(p.section);
+        let f = Vector3::from(p.force_n).norm() + p.mass_kg * g;
+        sum += f * s * s + Vector3::from(p.torque_nm).norm() * s;
+    }
+    let cable = |j: usize, t: f64| -> f64 {
+        robot.cables().get(j).map_or(0.0, |c| {
+            let s_end = c.route.last().map_or(0.0, |&k| robot.guides()[k].s);
+            t.abs() * c.base_hole.norm() * s_end
+        })
+    };
+    sum += (0..robot.cables().len())
+        .map(|j| cable(j, loads.tension(j)))
+        .sum::<f64>();
+    for (site, th) in params.iter().zip(theta) {
+        let s = |point: usize| loads.point.get(point).map_or(0.0, |p| end(p.section));
+        sum += match *site {
+            ParamSite::Force { point, .. } => th.abs() * s(point).powi(2),
+            ParamSite::Torque { point, .. } => th.abs() * s(point),
+            ParamSite::Mass { point } => th.abs() * g * s(point).powi(2),
+            ParamSite::Tension { cable: j } => cable(j, *th),
+        };
+    }
+    if sum.is_finite() {
+        sum / ei
+    } else {
+        f64::INFINITY
+    }
+}
