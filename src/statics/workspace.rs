@@ -52,6 +52,9 @@ const CORRECTOR_RATIO: f64 = 0.5;
 /// max norm): its tangent step no longer described where it went.
 const WARM_JUMP_RATIO: f64 = 1.0;
 const WARM_JUMP_FLOOR: f64 = 1e-3;
+/// Largest change of load intensity a warm solve under loads outside Jacobi's test
+/// may take above [`CERTIFY_INTENSITY`] before it is solved as a checked cold solve.
+const WARM_STEP_INTENSITY: f64 = 0.25;
 /// A warm solve under world-fixed loads that moved the unknowns (scaled) or the tip
 /// (in units of L) by more than this also gets Jacobi's test.
 const WARM_CHECK_STEP: f64 = 0.05;
@@ -105,6 +108,8 @@ pub struct Workspace {
     /// Warm solve: tip at the start and after the first accepted step.
     tip_start: Vector3<f64>,
     tip_first: Vector3<f64>,
+    /// Load intensity of the last solve.
+    last_intensity: f64,
     dx: Vec<f64>,
     res: Vec<f64>,
     lu: DenseLu,
@@ -173,6 +178,7 @@ impl Workspace {
             tip_tan: Vector3::zeros(),
             tip_start: Vector3::zeros(),
             tip_first: Vector3::zeros(),
+            last_intensity: 0.0,
             dx: vec![0.0; n],
             res: vec![0.0; n],
             lu: DenseLu::new(n),
@@ -382,7 +388,20 @@ impl Workspace {
         let rhs0 = self.rhs_count();
         self.jac_evals = 0;
         self.best_res = f64::INFINITY;
-        let warm = start == Start::Warm && self.has_solution;
+        let mut warm = start == Start::Warm && self.has_solution;
+        // branch guard, warm: under loads outside Jacobi's test above the certify
+        // intensity, a step of more than WARM_STEP_INTENSITY can land on another
+        // equilibrium already in its first pass (the chords settle elsewhere), which no
+        // check on the Newton path sees: such a step is solved as a checked cold solve
+        let intensity = self.load_intensity();
+        if warm
+            && self.settings.branch_guard
+            && !self.guarded()
+            && intensity > CERTIFY_INTENSITY
+            && (intensity - self.last_intensity).abs() > WARM_STEP_INTENSITY
+        {
+            warm = false;
+        }
         let (mut status, mut iterations, mut continuation_steps) = (SolveStatus::NonFinite, 0, 0);
         let mut cold = !warm;
         if warm {
@@ -415,6 +434,7 @@ impl Workspace {
             self.eval_at(false, 1.0);
         }
         self.has_solution = status.is_converged();
+        self.last_intensity = intensity;
         self.report = SolveReport {
             status,
             iterations,
