@@ -98,9 +98,17 @@ pub struct SolverSettings {
     pub max_continuation_steps: usize,
     /// How tensioned cables' next-chord directions are resolved (default `condensed`).
     pub cable_coupling: CableCoupling,
-    /// Reject a cold solve's equilibrium that fails Jacobi's condition (status
-    /// `unstable`; default true). Applies under world-fixed loads without tensioned
-    /// cables; costs one extra dual sweep per cold solve, none per warm solve.
+    /// Keep solves on the branch reached by loading the rod from rest (default true):
+    /// - world-fixed loads without tensioned cables: a cold solve's equilibrium that
+    ///   fails Jacobi's condition is `unstable` (one extra dual sweep per cold solve);
+    /// - other loads (tensioned cables, body-frame loads) of load intensity above 3
+    ///   (`Workspace::load_intensity`): a cold solve is a branch-checked load
+    ///   continuation (tangent predictor, corrector/predictor ratio, sign of the
+    ///   shooting Jacobian's determinant); past a fold it fails `stalled`;
+    /// - warm solves: one whose Newton path left its first (tangent) step's direction,
+    ///   a large one under world-fixed loads with a conjugate point, or one changing
+    ///   the intensity by more than 0.25 under other loads above 3, is solved cold.
+    ///   Small control-loop steps pay nothing extra.
     pub branch_guard: bool,
 }
 
