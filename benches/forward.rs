@@ -9,6 +9,10 @@
 //!   `solve(Start::Cold)` + `cable_lengths_into` every iteration; also the shipped scene
 //!   `data/scenes/demo_two_section.toml`. Issue target: <= 500 us.
 //! * `forward_rod_model`: Cosserat vs Kirchhoff rod, warm, otherwise as `forward_warm`.
+//! * `forward_cold_branch_checked`: the shipped track demo (`data/scenes/track_demo.toml`,
+//!   RK4 32, point guide mass) with one cable at `T r L/EI` = 5 and 7.5, cold: above load
+//!   intensity 3 the branch guard answers by a checked continuation (no target; the cost
+//!   of staying on the branch far past doubling back).
 //!
 //! Inputs are fixed (no randomness); robots, loads and workspaces are built and
 //! checked to converge outside the timed closures. A solve that does not converge
@@ -268,6 +272,32 @@ fn forward_cold_tensioned(c: &mut Criterion) {
     group.finish();
 }
 
+fn forward_cold_branch_checked(c: &mut Criterion) {
+    let mut group = c.benchmark_group("forward_cold_branch_checked");
+    configure(&mut group, 6.0);
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/track_demo.toml");
+    let scene = Scene::load(path).expect("shipped track demo loads");
+    let robot = scene.build_robot().expect("track demo robot");
+    let (l, ei) = (robot.length(), robot.sections()[0].stiffness.bend_twist.x);
+    let r = robot.cables()[0].base_hole.norm();
+    for (name, angle) in [
+        ("track_demo_tension_5", 5.0),
+        ("track_demo_tension_7_5", 7.5),
+    ] {
+        let mut loads = scene.loads.clone();
+        loads.tensions_n = vec![angle * ei / (r * l)];
+        let s = SolverSettings {
+            guide_mass: GuideMass::Point,
+            integrator: Integrator::Rk4 {
+                steps_per_section: 32,
+            },
+            ..SolverSettings::default()
+        };
+        bench_cold(&mut group, name, robot.clone(), loads, s);
+    }
+    group.finish();
+}
+
 fn forward_rod_model(c: &mut Criterion) {
     let robot = single_section_robot();
     let mut group = c.benchmark_group("forward_rod_model");
@@ -293,6 +323,7 @@ criterion_group!(
     benches,
     forward_warm,
     forward_cold_tensioned,
-    forward_rod_model
+    forward_rod_model,
+    forward_cold_branch_checked
 );
 criterion_main!(benches);

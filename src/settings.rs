@@ -106,8 +106,9 @@ pub struct SolverSettings {
     ///   continuation (tangent predictor, corrector/predictor ratio, sign of the
     ///   shooting Jacobian's determinant); past a fold it fails `stalled`;
     /// - warm solves: one whose Newton path left its first (tangent) step's direction,
-    ///   a large one under world-fixed loads with a conjugate point, or one changing
-    ///   the intensity by more than 0.25 under other loads above 3, is solved cold.
+    ///   a large one under world-fixed loads above intensity 3 with a conjugate point,
+    ///   or one changing the intensity by more than 0.25 under other loads above 3, is
+    ///   solved cold.
     ///   Small control-loop steps pay nothing extra.
     pub branch_guard: bool,
 }

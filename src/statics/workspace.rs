@@ -410,7 +410,10 @@ impl Workspace {
             (status, iterations) = self.newton(1.0, self.settings.max_iterations);
             // branch guard, warm: a solve its tangent step did not describe may have
             // jumped to another equilibrium; answer as a cold (checked) solve would
-            if status.is_converged() && self.settings.branch_guard && self.left_branch_checked() {
+            if status.is_converged()
+                && self.settings.branch_guard
+                && self.left_branch_checked(intensity)
+            {
                 cold = true;
                 self.best_res = f64::INFINITY;
             }
@@ -501,16 +504,17 @@ impl Workspace {
             || trest > WARM_JUMP_RATIO * t1 + WARM_JUMP_FLOOR
     }
 
-    /// [`Workspace::left_branch`], and for a large step under world-fixed loads also
-    /// Jacobi's test (one `Dual<3>` sweep, only then: the control loop's small steps
-    /// do not pay for it).
-    fn left_branch_checked(&mut self) -> bool {
+    /// [`Workspace::left_branch`], and for a large step under world-fixed loads of
+    /// intensity above [`CERTIFY_INTENSITY`] also Jacobi's test (one `Dual<3>` sweep,
+    /// only then: the control loop's small steps, and mild loads, do not pay for it).
+    fn left_branch_checked(&mut self, intensity: f64) -> bool {
         if self.left_branch() {
             return true;
         }
         let step = max_abs_diff(&self.x, &self.x_start);
         let moved = (self.tip - self.tip_start).norm() / self.plan.length;
         self.guarded()
+            && intensity > CERTIFY_INTENSITY
             && (step > WARM_CHECK_STEP || moved > WARM_CHECK_STEP)
             && self.conjugate_point().is_some()
     }
