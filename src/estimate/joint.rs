@@ -456,13 +456,13 @@ fn polish(est: &mut Estimator, st: &mut JointState, tol: f64) -> (bool, bool) {
 /// Chord steps `x_trial -= R_x^-1 r(trial)` at `theta_trial` with the current
 /// factorisation while they contract `||r||_inf` by [`POLISH_CONTRACTION`], until
 /// it is at most `target` or [`MAX_POLISH`] steps. The trial buffers end at the
-/// last contracting point; `false` when the workspace's last pass is not there.
-fn restore(est: &mut Estimator, st: &mut JointState, target: f64) -> bool {
+/// last contracting point.
+fn restore(est: &mut Estimator, st: &mut JointState, target: f64) {
     let n = st.n;
     let mut res = max_abs(&st.r_trial);
     for _ in 0..MAX_POLISH {
         if res <= target {
-            return true;
+            return;
         }
         st.x_keep.copy_from_slice(&st.x_trial);
         st.r_keep.copy_from_slice(&st.r_trial);
@@ -478,11 +478,10 @@ fn restore(est: &mut Estimator, st: &mut JointState, target: f64) -> bool {
             std::mem::swap(&mut st.x_trial, &mut st.x_keep);
             std::mem::swap(&mut st.r_trial, &mut st.r_keep);
             std::mem::swap(&mut st.l_trial, &mut st.l_keep);
-            return false;
+            return;
         }
         res = new;
     }
-    true
 }
 
 /// The joint iteration for one sample; leaves the workspace at the returned shape.
@@ -504,7 +503,6 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
         }
     }
     // `true` while the workspace's last f64 pass was at the current point
-    let mut ws_current = true;
     let mut f = data_cost(est, &est.theta, &est.len);
     let mut h1 = l1(&st.r, tau);
     st.nu = 0.0;
@@ -513,11 +511,11 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
         est.iterations = it + 1;
         if let Some(b) = est.spec.time_budget_s {
             if t0.elapsed().as_secs_f64() > b {
-                return conclude(est, st, EstimateStatus::TimeBudget, ws_current);
+                return conclude(est, st, EstimateStatus::TimeBudget);
             }
         }
         if let Err(status) = linearise(est, st) {
-            return conclude(est, st, status, ws_current);
+            return conclude(est, st, status);
         }
         // projected Newton (Bertsekas), as the nested method
         for k in 0..p {
@@ -529,7 +527,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
         loop {
             trials += 1;
             if trials > MAX_TRIALS {
-                return conclude(est, st, EstimateStatus::Stalled, ws_current);
+                return conclude(est, st, EstimateStatus::Stalled);
             }
             est.solve_step(est.mu);
             let mut small = true;
@@ -543,17 +541,16 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
                 if est.mu > LM_MAX_CONVERGED_DAMPING
                     && gn_predicted_decrease(est) > 1e-9 * (1.0 + f)
                 {
-                    return conclude(est, st, EstimateStatus::Stalled, ws_current);
+                    return conclude(est, st, EstimateStatus::Stalled);
                 }
                 let (done, moved) = polish(est, st, tol_r);
                 if moved {
                     est.g_exact = false;
-                    ws_current = true;
                     f = data_cost(est, &est.theta, &est.len);
                     h1 = l1(&st.r, tau);
                 }
                 if done {
-                    return conclude(est, st, EstimateStatus::Converged, ws_current);
+                    return conclude(est, st, EstimateStatus::Converged);
                 }
                 if moved {
                     break; // relinearise at the better point
@@ -600,7 +597,6 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
             let mut ft = data_cost(est, &est.theta_trial, &st.l_trial);
             let mut h1t = l1(&st.r_trial, tau);
             let mut accepted = ok && accept(ft, h1t, st.nu);
-            let mut trial_in_ws = true;
             if ok && (!accepted || h1t > h1) {
                 // second-order corrections (N&W section 18.3, eq. 18.24), repeated as
                 // chord steps x -= R_x^-1 r(trial) with the factorisation at hand,
@@ -609,7 +605,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
                 // l1 penalty charges (Maratos effect), shrinking the steps for
                 // nothing. Target: the linearised constraint's (1 - alpha) r, so the
                 // actual merit change can match the predicted one (dead zone floor).
-                trial_in_ws = restore(est, st, ((1.0 - alpha) * max_abs(&st.r)).max(tau));
+                restore(est, st, ((1.0 - alpha) * max_abs(&st.r)).max(tau));
                 ft = data_cost(est, &est.theta_trial, &st.l_trial);
                 h1t = l1(&st.r_trial, tau);
                 accepted = accept(ft, h1t, st.nu);
@@ -631,37 +627,30 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
                 std::mem::swap(&mut est.theta, &mut est.theta_trial);
                 est.ws.set_theta(&est.theta);
                 est.g_exact = false;
-                ws_current = trial_in_ws;
                 f = ft;
                 h1 = h1t;
                 break;
             }
-            ws_current = false;
             est.mu = (est.mu * 4.0).max(1e-6);
             if est.mu > 1e12 {
-                return conclude(est, st, EstimateStatus::Stalled, ws_current);
+                return conclude(est, st, EstimateStatus::Stalled);
             }
             if xa > xb {
                 // the Newton correction of x dominates: backtrack along it
                 alpha *= 0.5;
                 if alpha < 1e-6 {
-                    return conclude(est, st, EstimateStatus::Stalled, ws_current);
+                    return conclude(est, st, EstimateStatus::Stalled);
                 }
             }
         }
     }
-    conclude(est, st, EstimateStatus::MaxIterations, ws_current)
+    conclude(est, st, EstimateStatus::MaxIterations)
 }
 
 /// Leave the workspace at the returned shape and set `est.len`, `est.cost`.
 /// Converged: the joint iterate (an equilibrium to tolerance). Otherwise: the
 /// equilibrium at the best `theta` by one warm forward solve from the iterate.
-fn conclude(
-    est: &mut Estimator,
-    st: &mut JointState,
-    status: EstimateStatus,
-    _ws_current: bool,
-) -> EstimateStatus {
+fn conclude(est: &mut Estimator, st: &mut JointState, status: EstimateStatus) -> EstimateStatus {
     est.ws.set_theta(&est.theta);
     // always a fresh pass: the cable lengths (hence `len`, `cost`, the residuals and
     // the data check) come from the pass's recording, which the joint sweeps do not
