@@ -38,9 +38,9 @@
 
 use super::anderson::{Anderson, MAX_DEPTH};
 use super::arc::{arc_pose_t, PoseT};
-use super::sens::{scatter, seed_theta, seed_u, unit_t, Implicit, LoadsT, D6, W};
+use super::sens::{seed_theta, seed_u, unit_t, Implicit, LoadsT, D6, W};
 use super::{add_params, check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
-use crate::cables::{path_length, path_length_t};
+use crate::cables::path_length;
 use crate::loads::Loads;
 use crate::math::Real;
 use crate::robot::Robot;
@@ -472,15 +472,7 @@ impl PiecewiseConstantCurvature {
             }
             self.layout.kinematics(bd);
             self.layout.moments(bd, 1.0);
-            for (i, u) in bd.u_new.iter().enumerate() {
-                for a in 0..3 {
-                    scatter(&mut imp.phi, w, 3 * i + a, &u[a], c0);
-                }
-            }
-            for (j, pts) in bd.hole_pts.iter().enumerate() {
-                let base = self.layout.base_holes[j].map(D6::constant);
-                scatter(&mut imp.len, w, j, &path_length_t(&base, pts), c0);
-            }
+            imp.record_sweep(c0, &bd.u_new, &self.layout.base_holes, &bd.hole_pts);
         }
         for (l, v) in lengths.iter_mut().zip(&self.lengths) {
             *l = *v;

@@ -16,6 +16,7 @@
 //! the converged point: its only error is the fixed point's own residual
 //! (`tolerance`) times `|(I - Phi_u)^-1|`.
 
+use crate::cables::path_length_t;
 use crate::loads::{Frame, Loads};
 use crate::math::{DenseLu, Dual, Real};
 use crate::statics::ParamSite;
@@ -156,6 +157,28 @@ impl Implicit {
     /// Width `n + p` of the seeded directions.
     pub fn width(&self) -> usize {
         self.n + self.p
+    }
+
+    /// Record one dual sweep seeded at columns `c0..`: the new curvatures `u_new`
+    /// into the rows of `Phi`, the cable lengths from `base_holes` through the route
+    /// holes `hole_pts` into the rows of `l`.
+    pub fn record_sweep(
+        &mut self,
+        c0: usize,
+        u_new: &[Vector3<D6>],
+        base_holes: &[Vector3<f64>],
+        hole_pts: &[Vec<Vector3<D6>>],
+    ) {
+        let w = self.width();
+        for (i, u) in u_new.iter().enumerate() {
+            for a in 0..3 {
+                scatter(&mut self.phi, w, 3 * i + a, &u[a], c0);
+            }
+        }
+        for (j, pts) in hole_pts.iter().enumerate() {
+            let base = base_holes[j].map(D6::constant);
+            scatter(&mut self.len, w, j, &path_length_t(&base, pts), c0);
+        }
     }
 
     /// `out = l_theta + l_u (I - Phi_u)^-1 Phi_theta`, row-major `c x p`. `false` when
