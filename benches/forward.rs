@@ -74,8 +74,9 @@ fn guides(count: usize, first: f64, spacing: f64) -> GuideSpec {
 fn cable(hole: usize, end_section: usize) -> CableSpec {
     CableSpec {
         name: None,
-        hole,
+        hole: Some(hole),
         end_section,
+        ..Default::default()
     }
 }
 
@@ -85,6 +86,8 @@ fn single_section_robot() -> Robot {
         base: Default::default(),
         sections: vec![section(0.39, guides(5, 0.0054, 0.095))],
         cables: (0..3).map(|h| cable(h, 0)).collect(),
+        tendons: None,
+        friction: None,
     })
     .expect("valid single-section robot")
 }
@@ -96,6 +99,8 @@ fn two_section_robot() -> Robot {
         base: Default::default(),
         sections: vec![s(), s()],
         cables: (0..6).map(|j| cable(j % 3, j / 3)).collect(),
+        tendons: None,
+        friction: None,
     })
     .expect("valid two-section robot")
 }

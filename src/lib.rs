@@ -13,6 +13,7 @@ pub mod robot;
 pub mod rod;
 pub mod settings;
 pub mod statics;
+pub mod tendons;
 pub mod validation;
 
 pub use nalgebra;

@@ -493,10 +493,13 @@ fn disk_robot(disks: usize) -> Robot {
         cables: (0..3)
             .map(|h| cablesense::robot::CableSpec {
                 name: None,
-                hole: h,
+                hole: Some(h),
                 end_section: 0,
+                ..Default::default()
             })
             .collect(),
+        tendons: None,
+        friction: None,
     })
     .expect("valid robot")
 }

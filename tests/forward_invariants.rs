@@ -253,7 +253,8 @@ fn external_wrench(robot: &Robot, loads: &Loads, mass: GuideMass, sol: &Solution
             .iter()
             .map(|&gi| {
                 let pose = &sol.guides[gi].pose;
-                pose.position + pose.rotation * robot.guides()[gi].holes[cable.hole]
+                pose.position
+                    + pose.rotation * robot.guides()[gi].holes[cable.hole.expect("indexed hole")]
             })
             .collect();
         let base_hole = robot.base_position() + robot.base_rotation() * cable.base_hole;
@@ -506,7 +507,7 @@ fn chord_length(robot: &Robot, sol: &Solution, j: usize) -> f64 {
     let mut prev = robot.base_position() + robot.base_rotation() * c.base_hole;
     let mut total = 0.0;
     for &g in &c.route {
-        let p = hole_world(robot, sol, g, c.hole);
+        let p = hole_world(robot, sol, g, c.hole.expect("indexed hole"));
         total += (p - prev).norm();
         prev = p;
     }
@@ -526,7 +527,8 @@ fn cable_lengths_follow_each_disks_own_holes_on_a_straight_rod() {
         let mut want = gs[c.route[0]].s; // base plate to first disk: same hole, straight up
         for w in c.route.windows(2) {
             let (a, b) = (&gs[w[0]], &gs[w[1]]);
-            let jog = b.holes[c.hole] - a.holes[c.hole];
+            let h = c.hole.expect("indexed hole");
+            let jog = b.holes[h] - a.holes[h];
             want += ((b.s - a.s).powi(2) + jog.norm_squared()).sqrt();
         }
         Tol::abs(1e-12).check("cable length", j, 0.0, sol.cables[j].total_m, want);

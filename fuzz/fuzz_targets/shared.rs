@@ -372,8 +372,9 @@ impl ForwardInput {
             .flat_map(|k| {
                 (0..3).map(move |hole| CableSpec {
                     name: None,
-                    hole,
+                    hole: Some(hole),
                     end_section: k,
+                    ..Default::default()
                 })
             })
             .collect();
@@ -385,6 +386,8 @@ impl ForwardInput {
             },
             sections,
             cables,
+            tendons: None,
+            friction: None,
         })
         .ok()
     }

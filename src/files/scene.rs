@@ -31,6 +31,9 @@ pub struct Scene {
     /// Inverse problem for `estimate` and `track` (optional).
     #[serde(default)]
     pub estimate: Option<EstimateSpec>,
+    /// How to read actuator readings of displacement-driven tendons (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub readings: Option<super::readings::ReadingsSpec>,
 }
 
 /// Why a scene could not be read.
@@ -124,11 +127,38 @@ impl Scene {
         if let Some(e) = &self.estimate {
             e.validate(&robot)?;
         }
+        if let Some(r) = &self.readings {
+            r.validate()?;
+        }
         self.numerics.validate()
     }
     /// The validated robot.
     pub fn build_robot(&self) -> Result<Robot, ModelError> {
         Robot::new(self.robot.clone())
+    }
+    /// A workspace that solves this scene from actuator readings (the scene needs
+    /// displacement-driven tendons): reference solve at the pretensions included.
+    pub fn tendon_workspace(&self) -> Result<crate::tendons::TendonWorkspace, ModelError> {
+        crate::tendons::TendonWorkspace::new(
+            self.build_robot()?,
+            self.loads.clone(),
+            self.numerics.clone(),
+        )
+    }
+    /// A parser for readings files of this scene's displacement-driven tendons.
+    pub fn readings_parser(
+        &self,
+        ws: &crate::tendons::TendonWorkspace,
+    ) -> super::readings::ReadingsParser {
+        let robot = ws.workspace().robot();
+        super::readings::ReadingsParser::new(
+            ws.columns().to_vec(),
+            ws.driven()
+                .iter()
+                .map(|&j| robot.cables()[j].name.clone())
+                .collect(),
+            self.readings.clone().unwrap_or_default(),
+        )
     }
     /// Serialize to TOML.
     pub fn to_toml_string(&self) -> String {

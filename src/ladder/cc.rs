@@ -199,7 +199,7 @@ impl Layout {
         for (j, c) in self.robot.cables().iter().enumerate() {
             for (i, &g) in c.route.iter().enumerate() {
                 let pose = &b.guides[g];
-                let hole = self.robot.guides()[g].holes[c.hole].map(T::cst);
+                let hole = c.hole_local[i].map(T::cst);
                 b.hole_pts[j][i] = pose.position + pose.rotation * hole;
             }
         }
@@ -232,14 +232,10 @@ impl ConstantCurvature {
                     .map(|k| {
                         // the cable's hole on this section's first disk; a section without
                         // disks uses the nearest disk before it (or the base plate)
-                        let on = c.route.iter().find(|&&g| robot.guides()[g].section == k);
-                        let before = c
-                            .route
-                            .iter()
-                            .rev()
-                            .find(|&&g| robot.guides()[g].section < k);
+                        let on = c.route.iter().position(|&g| robot.guides()[g].section == k);
+                        let before = c.route.iter().rposition(|&g| robot.guides()[g].section < k);
                         let d = match on.or(before) {
-                            Some(&g) => robot.guides()[g].holes[c.hole],
+                            Some(i) => c.hole_local[i],
                             None => c.base_hole,
                         };
                         Vector3::z().cross(&d)

@@ -493,7 +493,7 @@ impl Layout {
         for (j, c) in self.robot.cables().iter().enumerate() {
             for (k, &g) in c.route.iter().enumerate() {
                 let pose = &b.bound[self.guide_boundary[g]];
-                let hole = self.robot.guides()[g].holes[c.hole].map(T::cst);
+                let hole = c.hole_local[k].map(T::cst);
                 b.hole_pts[j][k] = pose.position + pose.rotation * hole;
             }
         }

@@ -17,6 +17,7 @@ pub use spec::{
 use crate::error::ModelError;
 use crate::math::exp_so3;
 use crate::rod::Stiffness;
+use crate::tendons::{Actuation, TendonMechanics};
 use nalgebra::{Matrix3, Vector3};
 
 /// One guide disk of the validated robot.
@@ -63,8 +64,17 @@ impl Section {
 pub struct Cable {
     /// Optional name.
     pub name: String,
-    /// Hole index used on every disk and on the base plate.
-    pub hole: usize,
+    /// Hole index used on every disk and on the base plate (`None` for a cable with
+    /// its own routing).
+    pub hole: Option<usize>,
+    /// The cable's hole on each route disk, in that disk's local frame (m).
+    pub hole_local: Vec<Vector3<f64>>,
+    /// How the cable is driven.
+    pub actuation: Actuation,
+    /// Resolved tendon mechanics (`None` when no stiffness is given anywhere).
+    pub mechanics: Option<TendonMechanics>,
+    /// Readings column of a displacement-driven tendon.
+    pub reading: String,
     /// Section on whose last guide the cable ends.
     pub end_section: usize,
     /// Global guide indices the cable passes, base to termination.
@@ -142,22 +152,16 @@ impl Robot {
                     why: format!("section {} has no guide disk to end on", c.end_section),
                 });
             }
-            for &g in &route {
-                if c.hole >= guides[g].holes.len() {
-                    return Err(ModelError::BadIndex {
-                        field: format!(
-                            "{field}.hole (on guide {} of section {})",
-                            guides[g].index, guides[g].section
-                        ),
-                        index: c.hole,
-                        count: guides[g].holes.len(),
-                    });
-                }
-            }
-            let base_hole = guides[route[0]].holes[c.hole];
+            let hole_local = Self::route_holes(&spec, &guides, c, &route, &field)?;
+            let base_hole = hole_local[0];
+            let name = c.name.clone().unwrap_or_else(|| format!("cable{j}"));
             cables.push(Cable {
-                name: c.name.clone().unwrap_or_else(|| format!("cable{j}")),
+                reading: c.reading.clone().unwrap_or_else(|| name.clone()),
+                name,
                 hole: c.hole,
+                hole_local,
+                actuation: c.actuation,
+                mechanics: TendonMechanics::resolve(&c.mechanics(spec.tendons.as_ref())),
                 end_section: c.end_section,
                 route,
                 base_hole,
@@ -173,6 +177,70 @@ impl Robot {
             cables,
             base_rotation,
         })
+    }
+
+    /// A cable's hole on every disk of its route (local frames), from its hole index
+    /// or its own routing; errors name the field and the disk.
+    fn route_holes(
+        spec: &RobotSpec,
+        guides: &[Guide],
+        c: &spec::CableSpec,
+        route: &[usize],
+        field: &str,
+    ) -> Result<Vec<Vector3<f64>>, ModelError> {
+        let mut out = Vec::with_capacity(route.len());
+        for &g in route {
+            let guide = &guides[g];
+            match (&c.hole, &c.routing) {
+                (Some(h), _) => {
+                    let p = guide.holes.get(*h).ok_or_else(|| ModelError::BadIndex {
+                        field: format!(
+                            "{field}.hole (on guide {} of section {})",
+                            guide.index, guide.section
+                        ),
+                        index: *h,
+                        count: guide.holes.len(),
+                    })?;
+                    out.push(*p);
+                }
+                (None, Some(r)) => {
+                    let d = spec.sections[guide.section]
+                        .guides
+                        .as_ref()
+                        .map_or(f64::INFINITY, |gs| gs.diameter_m);
+                    if r.radius_m > d / 2.0 {
+                        return Err(ModelError::OutOfRange {
+                            field: format!("{field}.routing.radius_m"),
+                            value: r.radius_m,
+                            why: format!(
+                                "the hole lies outside disk {} of section {} (radius {} m)",
+                                guide.index,
+                                guide.section,
+                                d / 2.0
+                            ),
+                        });
+                    }
+                    let a = r.angle_rad(guide.section);
+                    out.push(Vector3::new(
+                        r.radius_m * a.cos(),
+                        r.radius_m * a.sin(),
+                        0.0,
+                    ));
+                }
+                (None, None) => {
+                    return Err(ModelError::Invalid {
+                        field: field.into(),
+                        why: "no hole and no routing".into(),
+                    })
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Capstan friction coefficient (0 when the robot has no `friction` table).
+    pub fn friction_mu(&self) -> f64 {
+        self.spec.friction.as_ref().map_or(0.0, |f| f.mu)
     }
 
     /// The description this robot was built from.

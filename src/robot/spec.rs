@@ -2,6 +2,7 @@
 
 use crate::error::ModelError;
 use crate::rod::{CrossSection, Material};
+use crate::tendons::{Actuation, FrictionSpec, RoutingSpec, TendonSpec};
 use serde::{Deserialize, Serialize};
 
 /// Whole robot: base pose, sections base to tip, cables.
@@ -16,6 +17,13 @@ pub struct RobotSpec {
     /// Cables (default none).
     #[serde(default)]
     pub cables: Vec<CableSpec>,
+    /// Tendon mechanics shared by every cable (each cable's `tendon` table overrides
+    /// it field by field). Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tendons: Option<TendonSpec>,
+    /// Tendon-on-disk friction (capstan law). Default none (frictionless).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionSpec>,
 }
 
 /// Base pose `r(0)`, `R(0)` (thesis table 2.1) as position plus axis-angle.
@@ -164,17 +172,54 @@ fn three_holes() -> Vec<f64> {
     vec![0.0, 120.0, 240.0]
 }
 
-/// A cable: which hole it uses and on which section's last disk it ends.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// A cable: which hole it uses, where it ends, and how it is driven.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CableSpec {
-    /// Optional name used in reports.
+    /// Optional name used in reports (default `cable<j>`).
     #[serde(default)]
     pub name: Option<String>,
     /// Hole index (into `holes.angles_deg`) used on every disk and the base plate.
-    pub hole: usize,
+    /// Exactly one of `hole` and `routing` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hole: Option<usize>,
+    /// The cable's own hole (radius, angle, per-section offset) on every disk it
+    /// passes and on the base plate, independent of the disks' `holes` list.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub routing: Option<RoutingSpec>,
     /// Section on whose last disk the cable is tied.
     pub end_section: usize,
+    /// How the cable is driven. Default `tension` (`loads.tensions_n`).
+    #[serde(default)]
+    pub actuation: Actuation,
+    /// Tendon mechanics, overriding `robot.tendons` field by field.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tendon: Option<TendonSpec>,
+    /// Column of a readings file holding this tendon's actuator reading
+    /// (displacement-driven tendons). Default: the cable's name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reading: Option<String>,
+}
+
+impl CableSpec {
+    /// A cable through hole index `hole` of every disk, tied at the end of
+    /// `end_section`, tension-driven.
+    pub fn through_hole(hole: usize, end_section: usize) -> Self {
+        Self {
+            hole: Some(hole),
+            end_section,
+            ..Self::default()
+        }
+    }
+
+    /// The mechanics in effect: this cable's table over the robot-wide one.
+    pub fn mechanics(&self, defaults: Option<&TendonSpec>) -> TendonSpec {
+        let own = self.tendon.clone().unwrap_or_default();
+        match defaults {
+            Some(d) => own.or(d),
+            None => own,
+        }
+    }
 }
 
 impl RobotSpec {
@@ -207,12 +252,46 @@ impl RobotSpec {
                 g.validate(k, s.length_m)?;
             }
         }
+        if let Some(t) = &self.tendons {
+            t.validate("robot.tendons")?;
+        }
+        if let Some(f) = &self.friction {
+            f.validate()?;
+        }
         for (j, c) in self.cables.iter().enumerate() {
+            let f = format!("robot.cables[{j}]");
             if c.end_section >= self.sections.len() {
                 return Err(ModelError::BadIndex {
-                    field: format!("robot.cables[{j}].end_section"),
+                    field: format!("{f}.end_section"),
                     index: c.end_section,
                     count: self.sections.len(),
+                });
+            }
+            match (&c.hole, &c.routing) {
+                (Some(_), Some(_)) => {
+                    return Err(ModelError::Invalid {
+                        field: f,
+                        why: "give either `hole` (an index into the disks' holes) or `routing` (the cable's own hole), not both".into(),
+                    })
+                }
+                (None, None) => {
+                    return Err(ModelError::Invalid {
+                        field: f,
+                        why: "a cable needs `hole` (an index into the disks' holes) or `routing = { radius_m, angle_deg }`".into(),
+                    })
+                }
+                (None, Some(r)) => r.validate(&format!("{f}.routing"))?,
+                (Some(_), None) => {}
+            }
+            if let Some(t) = &c.tendon {
+                t.validate(&format!("{f}.tendon"))?;
+            }
+            if c.actuation == Actuation::Displacement
+                && c.mechanics(self.tendons.as_ref()).stiffness_n.is_none()
+            {
+                return Err(ModelError::Invalid {
+                    field: format!("{f}.tendon.stiffness_n"),
+                    why: "a displacement-driven tendon needs its axial stiffness EA_t (N; `inf` for an inextensible tendon), here or in [robot.tendons]".into(),
                 });
             }
         }

@@ -7,9 +7,12 @@
 //! - a torque `M` at `s`: `|M| s / EI`;
 //! - a weight (payload, guide, rod element) at `s`: `m |g| s^2 / EI`, so the bare rod
 //!   contributes `rho A |g| L^3 / (3 EI)`;
-//! - a cable of tension `T` with its base hole at radius `r`, ending at `s_end`:
-//!   `T r s_end / EI` (the bending angle of the equivalent constant-curvature arc, the
-//!   map's `T r L / EI`).
+//! - the cables ending on one section's last disk at `s_end`, with tensions `T_j` and
+//!   holes `d_j` there: `|sum_j T_j (e3 x d_j)| s_end / EI`, the bending angle of the
+//!   equivalent constant-curvature arc under their net moment (one cable: the map's
+//!   `T r L / EI`). Antagonistic tendons under equal pretension cancel: they compress
+//!   the rod between the disks but do not bend it (a tendon-driven robot's
+//!   pretension is not a bending load).
 //!
 //! The intensity is the sum: an upper bound on the scale of the base moment times
 //! `L / EI`, hence on the total turning `int |u| ds` of any equilibrium of the
@@ -61,22 +64,38 @@ pub(crate) fn load_intensity(
         let f = Vector3::from(p.force_n).norm() + p.mass_kg * g;
         sum += f * s * s + Vector3::from(p.torque_nm).norm() * s;
     }
-    let cable = |j: usize, t: f64| -> f64 {
-        robot.cables().get(j).map_or(0.0, |c| {
-            let s_end = c.route.last().map_or(0.0, |&k| robot.guides()[k].s);
-            t.abs() * c.base_hole.norm() * s_end
-        })
+    // cable tension: the scene's plus its parameters'
+    let tension = |j: usize| -> f64 {
+        let extra: f64 = params
+            .iter()
+            .zip(theta)
+            .filter(|(site, _)| **site == ParamSite::Tension { cable: j })
+            .map(|(_, th)| *th)
+            .sum();
+        (loads.tension(j) + extra).abs()
     };
-    sum += (0..robot.cables().len())
-        .map(|j| cable(j, loads.tension(j)))
-        .sum::<f64>();
+    for k in 0..robot.sections().len() {
+        let mut moment = Vector3::zeros();
+        let mut s_end = 0.0;
+        for (j, c) in robot.cables().iter().enumerate() {
+            if c.end_section != k {
+                continue;
+            }
+            let (Some(&g), Some(d)) = (c.route.last(), c.hole_local.last()) else {
+                continue;
+            };
+            s_end = robot.guides()[g].s;
+            moment += Vector3::z().cross(d) * tension(j);
+        }
+        sum += moment.norm() * s_end;
+    }
     for (site, th) in params.iter().zip(theta) {
         let s = |point: usize| loads.point.get(point).map_or(0.0, |p| end(p.section));
         sum += match *site {
             ParamSite::Force { point, .. } => th.abs() * s(point).powi(2),
             ParamSite::Torque { point, .. } => th.abs() * s(point),
             ParamSite::Mass { point } => th.abs() * g * s(point).powi(2),
-            ParamSite::Tension { cable: j } => cable(j, *th),
+            ParamSite::Tension { .. } => 0.0,
         };
     }
     if sum.is_finite() {

@@ -501,7 +501,14 @@ fn apply_event<T: Real>(
                 } else {
                     buf.holes[j][k - 1]
                 };
-                // the cable pulls the disk along both straight chords (thesis 3.8.1 routing)
+                // the cable pulls the disk along both straight chords (thesis 3.8.1
+                // routing); with friction each chord has its own share of the
+                // actuator's tension (capstan factors, `crate::tendons::friction`)
+                let (t, t_next) = if k + 1 < c.len {
+                    (t.scale(c.factor[k]), t.scale(c.factor[k + 1]))
+                } else {
+                    (t.scale(c.factor[k]), t)
+                };
                 let mut f = unit(prev - p).map(|x| x * t);
                 if k + 1 < c.len && plan.condensed {
                     let mut next = v3::<T>(&buf.next[j][k]);
@@ -513,13 +520,13 @@ fn apply_event<T: Real>(
                             next[a].eps_mut()[base + a] = 1.0;
                         }
                     }
-                    f += unit(next - p).map(|x| x * t);
+                    f += unit(next - p).map(|x| x * t_next);
                 } else if k + 1 < c.len {
                     if let Some(u) = c.unknowns {
                         let i0 = u + 3 * k;
                         let next = Vector3::new(buf.x[i0], buf.x[i0 + 1], buf.x[i0 + 2])
                             .map(|x| x.scale(ls));
-                        f += unit(next - p).map(|x| x * t);
+                        f += unit(next - p).map(|x| x * t_next);
                     }
                 }
                 y.n -= f;

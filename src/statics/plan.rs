@@ -80,6 +80,10 @@ pub(crate) struct PlanCable {
     pub end_s: f64,
     /// Index of the first hole unknown (route disk 1) when tensioned.
     pub unknowns: Option<usize>,
+    /// Tension of chord `k` (ending at route disk `k`; chord 0 starts at the base
+    /// plate) relative to the actuator's: 1 without friction, the capstan factors
+    /// `exp(+-mu theta)` with it ([`crate::tendons`]).
+    pub factor: Vec<f64>,
 }
 
 /// Everything a pass needs.
@@ -127,8 +131,9 @@ pub(crate) struct Plan {
 }
 
 /// Tensioned cables through one disk that the condensed coupling handles (3 local
-/// dual directions each; sweeps are compiled for up to 18 local directions).
-pub(crate) const MAX_CONDENSED_CABLES: usize = 6;
+/// dual directions each; sweeps are compiled for up to 27 local directions, enough
+/// for a three-segment robot with three tendons per segment).
+pub(crate) const MAX_CONDENSED_CABLES: usize = 9;
 
 impl Plan {
     pub fn new(
@@ -300,11 +305,8 @@ impl Plan {
                 tension: loads.tension(j),
                 tensioned: is_tensioned(j),
                 base_hole: robot.base_position() + robot.base_rotation() * c.base_hole,
-                hole_local: c
-                    .route
-                    .iter()
-                    .map(|&g| robot.guides()[g].holes[c.hole])
-                    .collect(),
+                hole_local: c.hole_local.clone(),
+                factor: vec![1.0; c.route.len()],
                 len: c.route.len(),
                 end_s: robot.guides()[c.route[c.route.len() - 1]].s,
                 unknowns,

@@ -27,6 +27,9 @@ macro_rules! with_wide {
             Wide::W18($b) => $body,
             Wide::W21($b) => $body,
             Wide::W24($b) => $body,
+            Wide::W27($b) => $body,
+            Wide::W30($b) => $body,
+            Wide::W33($b) => $body,
         }
     };
 }
@@ -68,6 +71,10 @@ const MAX_CHORD_STEPS: usize = 8;
 // the buffers above without widening their visibility.
 #[path = "joint.rs"]
 pub(super) mod joint;
+
+// Tendon mechanics: hole positions and per-chord tension factors.
+#[path = "chords.rs"]
+mod chords;
 
 /// Where Newton starts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -1198,7 +1205,8 @@ fn norm2(v: &[f64]) -> f64 {
 }
 
 /// Sweep buffer of the condensed coupling: six outer directions plus the plan's
-/// `max_local` local ones (3 per tensioned cable through a disk, at most 18).
+/// `max_local` local ones (3 per tensioned cable through a disk, at most 27: a
+/// three-segment robot with three tendons per segment has nine through its first disks).
 enum Wide {
     None,
     W9(PassBuf<Dual<9>>),
@@ -1207,6 +1215,9 @@ enum Wide {
     W18(PassBuf<Dual<18>>),
     W21(PassBuf<Dual<21>>),
     W24(PassBuf<Dual<24>>),
+    W27(PassBuf<Dual<27>>),
+    W30(PassBuf<Dual<30>>),
+    W33(PassBuf<Dual<33>>),
 }
 
 impl Wide {
@@ -1220,7 +1231,10 @@ impl Wide {
             9 => Self::W15(PassBuf::new(plan)),
             12 => Self::W18(PassBuf::new(plan)),
             15 => Self::W21(PassBuf::new(plan)),
-            _ => Self::W24(PassBuf::new(plan)),
+            18 => Self::W24(PassBuf::new(plan)),
+            21 => Self::W27(PassBuf::new(plan)),
+            24 => Self::W30(PassBuf::new(plan)),
+            _ => Self::W33(PassBuf::new(plan)),
         }
     }
 }

@@ -114,6 +114,8 @@ pub fn robot_of(sections: Vec<SectionSpec>) -> Robot {
         base: Default::default(),
         sections,
         cables: vec![],
+        tendons: None,
+        friction: None,
     })
     .unwrap()
 }
@@ -133,10 +135,13 @@ pub fn five_guide_robot() -> Robot {
         cables: (0..3)
             .map(|h| CableSpec {
                 name: None,
-                hole: h,
+                hole: Some(h),
                 end_section: 0,
+                ..Default::default()
             })
             .collect(),
+        tendons: None,
+        friction: None,
     })
     .unwrap()
 }
@@ -157,19 +162,23 @@ pub fn two_section_robot_first_at(first: f64) -> Robot {
     let mut cables: Vec<CableSpec> = (0..3)
         .map(|h| CableSpec {
             name: None,
-            hole: h,
+            hole: Some(h),
             end_section: 0,
+            ..Default::default()
         })
         .collect();
     cables.extend((0..3).map(|h| CableSpec {
         name: None,
-        hole: h,
+        hole: Some(h),
         end_section: 1,
+        ..Default::default()
     }));
     Robot::new(RobotSpec {
         base: Default::default(),
         sections: vec![a, b],
         cables,
+        tendons: None,
+        friction: None,
     })
     .unwrap()
 }

@@ -6,6 +6,7 @@ mod estimate;
 mod output;
 mod pareto;
 mod progress;
+mod readings;
 mod solve;
 mod stability;
 mod stream;

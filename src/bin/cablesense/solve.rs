@@ -32,6 +32,45 @@ pub struct Args {
     /// Cable length target for `--model auto` (a length with unit).
     #[arg(long = "tol-cable", default_value = "1um", value_parser = parse_len)]
     tol_cable: f64,
+    /// Solve every row of this readings file (CSV or JSON lines) of a scene with
+    /// displacement-driven tendons, warm-started row to row: tip per row beside the
+    /// measured one, tensions and slack flags (`--json`: one object per row;
+    /// `--samples`: every row's backbone, with a `line` column).
+    #[arg(long)]
+    readings: Option<PathBuf>,
+}
+
+/// `solve SCENE --readings FILE`: exit 0 when every row converged.
+fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Result<ExitCode> {
+    use crate::readings::{is_tendon_scene, stream, Output};
+    anyhow::ensure!(
+        is_tendon_scene(scene),
+        "{}: no cable has actuation = \"displacement\": --readings needs displacement-driven tendons",
+        a.scene.display()
+    );
+    let file = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
+    let mut samples = match &a.samples {
+        Some(p) => Some(std::io::BufWriter::new(
+            std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?,
+        )),
+        None => None,
+    };
+    let output = if a.json { Output::Json } else { Output::Text };
+    let (solved, converged, bad) = stream(
+        scene,
+        &a.scene,
+        Box::new(std::io::BufReader::new(file)),
+        output,
+        samples.as_mut().map(|w| w as &mut dyn std::io::Write),
+    )?;
+    if !a.json {
+        println!("{solved} rows solved, {converged} converged, {bad} bad rows");
+    }
+    Ok(if converged == solved && bad == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }
 
 fn parse_len(s: &str) -> Result<f64, String> {
@@ -54,6 +93,9 @@ pub fn rung_by_label(robot: &cablesense::Robot, label: &str, extra: &str) -> any
 /// Run `solve`. Exit code 0 when converged, 1 when the solver did not converge.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let scene = Scene::load(&a.scene)?;
+    if let Some(path) = &a.readings {
+        return solve_readings(&a, &scene, path);
+    }
     let robot = scene.build_robot()?;
     let (rung, choice) = match a.model.as_str() {
         "scene" => (Rung::Rod(scene.numerics.clone()), None),

@@ -9,8 +9,10 @@ use std::process::ExitCode;
 /// Arguments of `track`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scene with an [estimate] table. Default: the shipped demo, which also
-    /// defaults the input to its recorded stream.
+    /// Scene with an [estimate] table, or a scene with displacement-driven tendons
+    /// and no [estimate] table (rows of servo readings -> shape per row, warm-started
+    /// from the previous row). Default: the shipped demo, which also defaults the
+    /// input to its recorded stream.
     scene: Option<PathBuf>,
     /// Read rows from this file instead of standard input.
     #[arg(long)]
@@ -28,6 +30,24 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             Some(i.unwrap_or_else(|| PathBuf::from("data/measurements/track_demo.csv"))),
         ),
     };
+    let scene = cablesense::Scene::load(&scene_path)?;
+    if crate::readings::is_tendon_scene(&scene) && scene.estimate.is_none() {
+        // servo readings in, shape per row out (the control-loop case)
+        let reader: Box<dyn BufRead> = match &input {
+            Some(f) => Box::new(std::io::BufReader::new(
+                std::fs::File::open(f).with_context(|| format!("opening {}", f.display()))?,
+            )),
+            None => Box::new(std::io::BufReader::new(std::io::stdin())),
+        };
+        crate::readings::stream(
+            &scene,
+            &scene_path,
+            reader,
+            crate::readings::Output::Json,
+            None,
+        )?;
+        return Ok(ExitCode::SUCCESS);
+    }
     let (scene, mut est) = estimator(&scene_path, &a.model)?;
     let mut p = parser(&scene, &est);
     let reader: Box<dyn BufRead> = match &input {

@@ -1,0 +1,179 @@
+//! Rows of actuator readings through a tendon-driven scene (`solve --readings`,
+//! `track` on a scene with displacement-driven tendons): one warm-started solve per
+//! row, one output record per row; a bad row is reported and the stream goes on.
+
+use anyhow::Context;
+use cablesense::files::readings::{ReadingRow, ReadingsParser};
+use cablesense::tendons::{TendonReport, TendonWorkspace};
+use cablesense::Scene;
+use serde_json::{json, Value};
+use std::io::{BufRead, Write};
+use std::path::Path;
+
+/// Whether a scene has displacement-driven tendons.
+pub fn is_tendon_scene(scene: &Scene) -> bool {
+    scene
+        .robot
+        .cables
+        .iter()
+        .any(|c| c.actuation == cablesense::tendons::Actuation::Displacement)
+}
+
+/// How to print each row.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Output {
+    /// One JSON object per row.
+    Json,
+    /// One text line per row.
+    Text,
+}
+
+/// The per-row record.
+pub fn row_json(
+    ws: &TendonWorkspace,
+    row: &ReadingRow,
+    rep: &TendonReport,
+    elapsed_s: f64,
+) -> Value {
+    let robot = ws.workspace().robot();
+    let tip = ws.tip_position();
+    let names: Vec<&str> = ws
+        .driven()
+        .iter()
+        .map(|&j| robot.cables()[j].name.as_str())
+        .collect();
+    json!({
+        "line": row.line,
+        "t_s": row.t_s,
+        "status": rep.status,
+        "iterations": rep.iterations,
+        "forward_solves": rep.forward_solves,
+        "residual_m": rep.residual_m,
+        "tip_position_m": [tip.x, tip.y, tip.z],
+        "measured_tip_m": row.measured_tip_m,
+        "tendons": names,
+        "readings_m": row.readings_m,
+        "tensions_n": ws.tensions(),
+        "taut": ws.taut(),
+        "elapsed_s": elapsed_s,
+    })
+}
+
+fn row_text(ws: &TendonWorkspace, row: &ReadingRow, rep: &TendonReport) -> String {
+    let tip = ws.tip_position() * 1e3;
+    let measured = row
+        .measured_tip_m
+        .map(|m| format!("[{:8.2} {:8.2} {:8.2}]", m[0] * 1e3, m[1] * 1e3, m[2] * 1e3))
+        .unwrap_or_else(|| "-".into());
+    let tensions: Vec<String> = ws
+        .tensions()
+        .iter()
+        .zip(ws.taut())
+        .map(|(t, taut)| {
+            if *taut {
+                format!("{t:.2}")
+            } else {
+                "slack".into()
+            }
+        })
+        .collect();
+    format!(
+        "line {:5}  {:<14} tip [{:8.2} {:8.2} {:8.2}] mm  measured {measured}  T [{}] N",
+        row.line,
+        format!("{:?}", rep.status).to_lowercase(),
+        tip.x,
+        tip.y,
+        tip.z,
+        tensions.join(" ")
+    )
+}
+
+/// Stream `reader` through the scene; returns (rows solved, rows converged, bad rows).
+pub fn stream(
+    scene: &Scene,
+    scene_path: &Path,
+    reader: Box<dyn BufRead>,
+    output: Output,
+    mut samples: Option<&mut dyn Write>,
+) -> anyhow::Result<(usize, usize, usize)> {
+    let mut ws = scene
+        .tendon_workspace()
+        .with_context(|| format!("{}: building the tendon model", scene_path.display()))?;
+    let mut parser: ReadingsParser = scene.readings_parser(&ws);
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    if output == Output::Text {
+        let robot = ws.workspace().robot();
+        let names: Vec<String> = ws
+            .driven()
+            .iter()
+            .zip(ws.columns())
+            .map(|(&j, c)| format!("{}<-{c}", robot.cables()[j].name))
+            .collect();
+        writeln!(out, "tendons: {}", names.join(" "))?;
+    }
+    if let Some(w) = samples.as_deref_mut() {
+        writeln!(w, "line,s_m,x_m,y_m,z_m")?;
+    }
+    let (mut solved, mut converged, mut bad) = (0, 0, 0);
+    for (i, line) in reader.lines().enumerate() {
+        let line = match line {
+            Ok(l) => l,
+            Err(e) => {
+                bad += 1;
+                emit_error(&mut out, output, i + 1, "line", &format!("unreadable: {e}"))?;
+                continue;
+            }
+        };
+        let row = match parser.line(i + 1, &line) {
+            Ok(None) => continue,
+            Ok(Some(r)) => r,
+            Err(e) => {
+                bad += 1;
+                emit_error(&mut out, output, e.line, &e.field, &e.why)?;
+                continue;
+            }
+        };
+        let t0 = std::time::Instant::now();
+        let rep = match ws.solve_readings(&row.readings_m) {
+            Ok(r) => r,
+            Err(e) => {
+                bad += 1;
+                emit_error(&mut out, output, row.line, "readings", &e.to_string())?;
+                continue;
+            }
+        };
+        let elapsed = t0.elapsed().as_secs_f64();
+        solved += 1;
+        converged += usize::from(rep.status.is_converged());
+        match output {
+            Output::Json => writeln!(out, "{}", row_json(&ws, &row, &rep, elapsed))?,
+            Output::Text => writeln!(out, "{}", row_text(&ws, &row, &rep))?,
+        }
+        if let Some(w) = samples.as_deref_mut() {
+            let sol = ws.workspace_mut().solution();
+            for s in &sol.samples {
+                writeln!(w, "{},{},{},{},{}", row.line, s.s, s.r.x, s.r.y, s.r.z)?;
+            }
+        }
+        out.flush()?;
+    }
+    Ok((solved, converged, bad))
+}
+
+fn emit_error(
+    out: &mut impl Write,
+    output: Output,
+    line: usize,
+    field: &str,
+    why: &str,
+) -> std::io::Result<()> {
+    match output {
+        Output::Json => writeln!(
+            out,
+            "{}",
+            json!({"line": line, "error": why, "field": field})
+        ),
+        Output::Text => writeln!(out, "line {line:5}  error: {field}: {why}"),
+    }
+}

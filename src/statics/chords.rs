@@ -1,0 +1,44 @@
+//! Workspace methods for tendon mechanics (`crate::tendons`): the world positions of
+//! each cable's holes after the last pass, and the per-chord tension factors that
+//! capstan friction sets.
+//!
+//! A child module of `workspace` (declared there with `#[path]`), like `joint.rs`, so
+//! it reads the private pass buffer without widening its visibility.
+
+use super::Workspace;
+use nalgebra::Vector3;
+
+impl Workspace {
+    /// World positions (m) of cable `j`'s holes on its route disks, base to
+    /// termination, from the last `f64` pass (after a converged solve: of the
+    /// solution). Empty for an unknown cable.
+    pub fn cable_holes(&self, j: usize) -> &[Vector3<f64>] {
+        self.b64.holes.get(j).map_or(&[], |h| &h[..])
+    }
+
+    /// World position (m) of cable `j`'s hole in the base plate.
+    pub fn base_hole_world(&self, j: usize) -> Vector3<f64> {
+        self.plan
+            .cables
+            .get(j)
+            .map_or(Vector3::zeros(), |c| c.base_hole)
+    }
+
+    /// Set the tension of each chord of cable `j` relative to the actuator's
+    /// (`factors[k]` for the chord ending at route disk `k`); missing entries are 1.
+    /// Takes effect from the next pass; no allocation.
+    pub fn set_chord_factors(&mut self, j: usize, factors: &[f64]) {
+        if let Some(c) = self.plan.cables.get_mut(j) {
+            for (k, f) in c.factor.iter_mut().enumerate() {
+                *f = factors.get(k).copied().unwrap_or(1.0);
+            }
+            // the last pass no longer matches the plan
+            self.last_pass = None;
+        }
+    }
+
+    /// Per-chord tension factors of cable `j` now in effect.
+    pub fn chord_factors(&self, j: usize) -> &[f64] {
+        self.plan.cables.get(j).map_or(&[], |c| &c.factor[..])
+    }
+}

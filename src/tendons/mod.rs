@@ -1,0 +1,81 @@
+//! Tendon mechanics of a tendon-driven continuum robot (TDCR): how each cable is
+//! actuated, its stretch and pretension, slack, capstan friction and its own routing.
+//!
+//! A displacement-driven tendon is pulled by a position-controlled actuator whose
+//! encoder reads `q` (m, positive = pulled). The reading sets the tendon's free
+//! (unstretched) length `L_f = L0 - q` between the actuator and the termination disk.
+//! With the path `l(shape)` through the holes (thesis 3.8.1), an axial stiffness
+//! `EA_t` and a series spring `k_s` at the actuator, a taut tendon carries
+//!
+//! ```text
+//! l = L_f (1 + T/EA_t) + T/k_s          <=>  T = (l - L_f) / (L_f/EA_t + 1/k_s)
+//! ```
+//!
+//! (for `k_s = inf` this is the issue's `T = EA_t (l - L_f)/L_f`), and a tendon whose
+//! path is shorter than its free length is slack: `T = 0` and its reading says
+//! nothing about the path. Both cases are the complementarity condition
+//! `0 <= T  _|_  L_f (1 + T/EA_t) + T/k_s - l >= 0`, solved by a semi-smooth Newton
+//! method on the tensions around the shooting solve ([`TendonWorkspace`]), with the
+//! exact derivatives `dl/dT` of the path lengths (implicit differentiation of the
+//! shooting problem, [`crate::Workspace::length_sensitivities`]) on the taut side and
+//! the identity on the slack side.
+//!
+//! The pretension `T0` at `q = 0` fixes `L0`: the robot is solved with every
+//! displacement-driven tendon at `T0` under the scene's loads, and `L0 = (l_ref -
+//! T0/k_s) / (1 + T0/EA_t)`.
+//!
+//! Rucker & Webster 2011 ("Statics and dynamics of continuum robots with general
+//! tendon routing and external loading", IEEE T-RO 27(6)) treat tendons as
+//! inextensible with given tensions; stretch, pretension and slack are what the
+//! position-controlled hardware adds (see `data/hardware/ftdcr_v4/`).
+
+mod friction;
+mod solve;
+mod spec;
+
+pub use friction::capstan_factors;
+pub use solve::{TendonReport, TendonSettings, TendonWorkspace};
+pub use spec::{Actuation, FrictionSpec, RoutingSpec, TendonSpec};
+
+/// Resolved mechanics of one tendon (SI units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TendonMechanics {
+    /// Axial stiffness `EA_t` (N); `inf` = inextensible.
+    pub stiffness_n: f64,
+    /// Series spring at the actuator (N/m); `inf` = none.
+    pub series_stiffness_n_per_m: f64,
+    /// Tension at reading 0 (N).
+    pub pretension_n: f64,
+    /// Encoder reading at `q = 0` (m).
+    pub zero_offset_m: f64,
+}
+
+impl TendonMechanics {
+    /// From a (validated) spec; `None` without a stiffness.
+    pub fn resolve(spec: &TendonSpec) -> Option<Self> {
+        Some(Self {
+            stiffness_n: spec.stiffness_n?,
+            series_stiffness_n_per_m: spec.series_stiffness_n_per_m.unwrap_or(f64::INFINITY),
+            pretension_n: spec.pretension_n.unwrap_or(0.0),
+            zero_offset_m: spec.zero_offset_m.unwrap_or(0.0),
+        })
+    }
+
+    /// Compliance `dl/dT` of the taut tendon at free length `free` (m/N), with
+    /// `stretch` the length-weighted mean tension factor of its chords (1 without
+    /// friction).
+    pub fn compliance(&self, free: f64, stretch: f64) -> f64 {
+        free * stretch / self.stiffness_n + 1.0 / self.series_stiffness_n_per_m
+    }
+
+    /// Path length (m) a taut tendon of free length `free` covers at tension `t`.
+    pub fn covered(&self, free: f64, t: f64, stretch: f64) -> f64 {
+        free + t * self.compliance(free, stretch)
+    }
+
+    /// Free length `L0` (m) from the reference path `l_ref` at the pretension.
+    pub fn free_length_at_rest(&self, l_ref: f64) -> f64 {
+        let t0 = self.pretension_n;
+        (l_ref - t0 / self.series_stiffness_n_per_m) / (1.0 + t0 / self.stiffness_n)
+    }
+}

@@ -1,0 +1,618 @@
+//! Forward solve from actuator readings: the semi-smooth Newton method on the
+//! tensions of the displacement-driven tendons around the shooting solve.
+//!
+//! Unknowns: the tensions `T` of the `p` displacement-driven tendons (load
+//! parameters of the inner [`Workspace`], so the shooting Newton sees them as cable
+//! tensions). Residual, per tendon, in metres (the NCP "min" function):
+//!
+//! ```text
+//! G_i(T) = min( a_i T_i ,  c_i(L_f) T_i + L_f,i - l_i(T) )
+//! ```
+//!
+//! with `c_i` the compliance (`L_f/EA_t + 1/k_s`, [`TendonMechanics::compliance`]),
+//! `l_i(T)` the path length of the equilibrium at `T` and `a_i = c_i + r_i^2 L/EI` a
+//! positive scale (any positive scale gives the same solution set; this one keeps
+//! both branches in the same units and well scaled for inextensible tendons).
+//! `G_i = 0` is exactly "taut with `T_i = (l_i - L_f,i)/c_i >= 0`" or "slack with
+//! `T_i = 0` and `l_i <= L_f,i`". The generalized Jacobian row is `c_i e_i - dl_i/dT`
+//! on the taut side (exact, from [`Workspace::length_sensitivities`]) and `a_i e_i`
+//! on the slack side; steps are projected onto `T >= 0` and damped by a
+//! backtracking line search on `|G|`.
+//!
+//! Friction (capstan factors per chord, [`super::capstan_factors`]) is coupled by a
+//! lagged (Picard) update: the factors of the last equilibrium are frozen during a
+//! Newton step and refreshed after it; the iteration ends when `G` is below
+//! tolerance and the factors no longer change. The derivatives of the factors with
+//! respect to the shape are not in the Jacobian (they are second order in `mu`
+//! times the change of wrap angle per step).
+
+use super::{capstan_factors, Actuation, TendonMechanics};
+use crate::error::ModelError;
+use crate::loads::Loads;
+use crate::math::DenseLu;
+use crate::robot::Robot;
+use crate::settings::SolverSettings;
+use crate::statics::{ParamSite, SolveStatus, Start, Workspace};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// Settings of the tendon iteration (the shooting solve inside has its own).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TendonSettings {
+    /// Newton iterations on the tensions (default 30).
+    pub max_iterations: usize,
+    /// Tolerance on `max_i |G_i|` (m), the mismatch between each taut tendon's path
+    /// and the length it covers at its tension (default 1e-12 m).
+    pub tolerance_m: f64,
+}
+
+impl Default for TendonSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 30,
+            tolerance_m: 1e-12,
+        }
+    }
+}
+
+/// Outcome of one solve from readings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TendonReport {
+    /// `converged` when both the shooting problem and the tendon conditions hold.
+    pub status: SolveStatus,
+    /// Newton iterations on the tensions.
+    pub iterations: usize,
+    /// `max_i |G_i|` at the returned point (m).
+    pub residual_m: f64,
+    /// Shooting solves run (line-search trials included).
+    pub forward_solves: usize,
+    /// Tendons that are slack at the returned point.
+    pub slack: usize,
+}
+
+/// A robot driven by actuator readings: allocate once, solve every row.
+pub struct TendonWorkspace {
+    ws: Workspace,
+    /// Cable index of each displacement-driven tendon.
+    driven: Vec<usize>,
+    mech: Vec<TendonMechanics>,
+    /// Columns of the readings, per driven tendon.
+    columns: Vec<String>,
+    /// `L0` per driven tendon (m).
+    free0: Vec<f64>,
+    /// `L_f = L0 - q` for the current readings (m).
+    free: Vec<f64>,
+    /// Scale `a_i` of the slack branch (m/N) without the tendon's own compliance.
+    geo: Vec<f64>,
+    /// Tensions of the driven tendons (N) and the trial point.
+    t: Vec<f64>,
+    t_trial: Vec<f64>,
+    /// Taut flags.
+    taut: Vec<bool>,
+    /// Residual `G` and Newton step.
+    g: Vec<f64>,
+    step: Vec<f64>,
+    /// Full parameter vector of the inner workspace: tensions, then `extra`.
+    theta: Vec<f64>,
+    n_extra: usize,
+    /// `dl/dtheta` (`c x (p + extra)`) and the lengths of all cables.
+    sens: Vec<f64>,
+    lengths: Vec<f64>,
+    lu: DenseLu,
+    /// `sens` is from the current point (else from an earlier one: chord steps).
+    sens_fresh: bool,
+    lu_fresh_at_step: bool,
+    /// `lu` holds a factorised Jacobian that chord steps may reuse.
+    lu_ok: bool,
+    /// Friction: `mu`, deadband, per-tendon direction (-1 pulled in, +1 paid out, 0
+    /// at rest), last readings, factor scratch and length-weighted mean factor.
+    mu: f64,
+    deadband: f64,
+    sign: Vec<f64>,
+    last_q: Vec<f64>,
+    factors: Vec<Vec<f64>>,
+    mean_factor: Vec<f64>,
+    has_solution: bool,
+    settings: TendonSettings,
+    report: TendonReport,
+}
+
+impl TendonWorkspace {
+    /// Build for a robot with displacement-driven tendons: validates, solves the
+    /// reference (every driven tendon at its pretension) and fixes each `L0`.
+    pub fn new(robot: Robot, loads: Loads, settings: SolverSettings) -> Result<Self, ModelError> {
+        Self::with_params(robot, loads, settings, &[])
+    }
+
+    /// Like [`TendonWorkspace::new`] with extra load parameters (after the
+    /// tensions in the inner workspace's `theta`), for estimation.
+    pub fn with_params(
+        robot: Robot,
+        loads: Loads,
+        settings: SolverSettings,
+        extra: &[ParamSite],
+    ) -> Result<Self, ModelError> {
+        let mut driven = Vec::new();
+        let mut mech = Vec::new();
+        let mut columns = Vec::new();
+        let mut geo = Vec::new();
+        let ei = robot.sections()[0].stiffness.bend_twist.x;
+        for (j, c) in robot.cables().iter().enumerate() {
+            let field = format!("robot.cables[{j}]");
+            match c.actuation {
+                Actuation::Displacement => {
+                    if loads.tension(j) != 0.0 {
+                        return Err(ModelError::Invalid {
+                            field: format!("loads.tensions_n[{j}]"),
+                            why: format!(
+                                "cable `{}` is displacement-driven: its tension follows from its reading",
+                                c.name
+                            ),
+                        });
+                    }
+                    let m = c.mechanics.ok_or_else(|| ModelError::Invalid {
+                        field: format!("{field}.tendon.stiffness_n"),
+                        why: "a displacement-driven tendon needs its axial stiffness".into(),
+                    })?;
+                    driven.push(j);
+                    mech.push(m);
+                    columns.push(c.reading.clone());
+                    let s_end = robot.guides()[*c.route.last().unwrap_or(&0)].s;
+                    geo.push((c.base_hole.norm().powi(2) * s_end / ei).max(1e-12));
+                }
+                Actuation::Passive => {
+                    if loads.tension(j) != 0.0 {
+                        return Err(ModelError::Invalid {
+                            field: format!("loads.tensions_n[{j}]"),
+                            why: format!(
+                                "cable `{}` is passive (a measuring cable): its tension is 0",
+                                c.name
+                            ),
+                        });
+                    }
+                }
+                Actuation::Tension => {}
+            }
+        }
+        if driven.is_empty() {
+            return Err(ModelError::Invalid {
+                field: "robot.cables".into(),
+                why: "no cable has `actuation = \"displacement\"`: nothing to drive from readings"
+                    .into(),
+            });
+        }
+        let mut params: Vec<ParamSite> = driven
+            .iter()
+            .map(|&j| ParamSite::Tension { cable: j })
+            .collect();
+        params.extend_from_slice(extra);
+        let nc = robot.cables().len();
+        let routes: Vec<usize> = robot.cables().iter().map(|c| c.route.len()).collect();
+        let mu = robot.friction_mu();
+        let deadband = robot.spec().friction.as_ref().map_or(0.0, |f| f.deadband_m);
+        let ws = Workspace::with_params(robot, loads, settings, &params)?;
+        let p = driven.len();
+        let np = params.len();
+        let mut me = Self {
+            ws,
+            columns,
+            free0: vec![0.0; p],
+            free: vec![0.0; p],
+            geo,
+            t: mech.iter().map(|m| m.pretension_n).collect(),
+            t_trial: vec![0.0; p],
+            taut: vec![true; p],
+            g: vec![0.0; p],
+            step: vec![0.0; p],
+            theta: vec![0.0; np],
+            n_extra: extra.len(),
+            sens: vec![0.0; nc * np],
+            lengths: vec![0.0; nc],
+            lu: DenseLu::new(p),
+            sens_fresh: false,
+            lu_fresh_at_step: false,
+            lu_ok: false,
+            mu,
+            deadband,
+            sign: vec![0.0; p],
+            last_q: vec![0.0; p],
+            factors: driven.iter().map(|&j| vec![1.0; routes[j]]).collect(),
+            mean_factor: vec![1.0; p],
+            has_solution: false,
+            settings: TendonSettings::default(),
+            report: TendonReport {
+                status: SolveStatus::NonFinite,
+                iterations: 0,
+                residual_m: f64::INFINITY,
+                forward_solves: 0,
+                slack: 0,
+            },
+            driven,
+            mech,
+        };
+        me.reference()?;
+        Ok(me)
+    }
+
+    /// Solve at the pretensions with zero readings and set `L0`.
+    fn reference(&mut self) -> Result<(), ModelError> {
+        for (i, m) in self.mech.iter().enumerate() {
+            self.theta[i] = m.pretension_n;
+        }
+        self.ws.set_theta(&self.theta);
+        let rep = self.ws.solve(Start::Cold);
+        if !rep.status.is_converged() {
+            return Err(ModelError::Invalid {
+                field: "robot.tendons.pretension_n".into(),
+                why: format!(
+                    "the robot at its pretensions (the reference that fixes each tendon's free length) did not solve: {:?}, residual {:.3e}",
+                    rep.status, rep.residual
+                ),
+            });
+        }
+        for (i, &j) in self.driven.iter().enumerate() {
+            let l = crate::cables::path_length(&self.ws.base_hole_world(j), self.ws.cable_holes(j));
+            self.free0[i] = self.mech[i].free_length_at_rest(l);
+            if self.free0[i].is_nan() || self.free0[i] <= 0.0 {
+                return Err(ModelError::OutOfRange {
+                    field: format!("robot.cables[{j}].tendon"),
+                    value: self.free0[i],
+                    why: "the pretension and series spring leave no free length".into(),
+                });
+            }
+        }
+        self.has_solution = true;
+        Ok(())
+    }
+
+    /// Replace the tendon settings.
+    pub fn set_tendon_settings(&mut self, settings: TendonSettings) {
+        self.settings = settings;
+    }
+    /// Cable indices of the displacement-driven tendons, in reading order.
+    pub fn driven(&self) -> &[usize] {
+        &self.driven
+    }
+    /// Readings column of each driven tendon.
+    pub fn columns(&self) -> &[String] {
+        &self.columns
+    }
+    /// Free length `L0` of each driven tendon at reading 0 (m).
+    pub fn rest_free_lengths(&self) -> &[f64] {
+        &self.free0
+    }
+    /// Tensions of the driven tendons at the last solve (N).
+    pub fn tensions(&self) -> &[f64] {
+        &self.t
+    }
+    /// Whether each driven tendon is taut at the last solve.
+    pub fn taut(&self) -> &[bool] {
+        &self.taut
+    }
+    /// Report of the last solve.
+    pub fn report(&self) -> &TendonReport {
+        &self.report
+    }
+    /// The inner shooting workspace (shape, lengths, solution).
+    pub fn workspace(&self) -> &Workspace {
+        &self.ws
+    }
+    /// The inner shooting workspace, mutable (e.g. to read a full `solution()`).
+    pub fn workspace_mut(&mut self) -> &mut Workspace {
+        &mut self.ws
+    }
+    /// Tip position of the last solve (m).
+    pub fn tip_position(&self) -> Vector3<f64> {
+        self.ws.tip_position()
+    }
+    /// Path lengths of all cables at the last solve (m).
+    pub fn lengths(&self) -> &[f64] {
+        &self.lengths
+    }
+    /// Friction direction of each driven tendon (-1 pulled in, +1 paid out, 0 rest).
+    pub fn friction_direction(&self) -> &[f64] {
+        &self.sign
+    }
+    /// Values of the extra load parameters (after the tensions).
+    pub fn set_extra(&mut self, extra: &[f64]) {
+        let p = self.driven.len();
+        for (k, v) in extra.iter().enumerate().take(self.n_extra) {
+            self.theta[p + k] = *v;
+        }
+    }
+
+    /// Solve from the readings of the driven tendons (m, in [`Self::driven`]
+    /// order), warm-started from the previous solve. No allocation.
+    pub fn solve_readings(&mut self, readings_m: &[f64]) -> Result<TendonReport, ModelError> {
+        self.solve_readings_from(readings_m, Start::Warm)
+    }
+
+    /// Check readings: one per driven tendon, finite, leaving a positive free length.
+    fn check_readings(&self, q: &[f64]) -> Result<(), ModelError> {
+        if q.len() != self.driven.len() {
+            return Err(ModelError::Invalid {
+                field: "readings".into(),
+                why: format!(
+                    "{} readings for {} displacement-driven tendons",
+                    q.len(),
+                    self.driven.len()
+                ),
+            });
+        }
+        for (i, &v) in q.iter().enumerate() {
+            ModelError::finite(format!("readings[{i}] ({})", self.columns[i]), v)?;
+            let free = self.free0[i] - (v - self.mech[i].zero_offset_m);
+            if free <= 0.0 {
+                return Err(ModelError::OutOfRange {
+                    field: format!("readings[{i}] ({})", self.columns[i]),
+                    value: v,
+                    why: format!(
+                        "pulls in more than the whole tendon (free length {} m)",
+                        self.free0[i]
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// [`TendonWorkspace::solve_readings`] with a chosen start (`Cold` restarts the
+    /// shooting from the straight rod and the tensions from the pretensions).
+    pub fn solve_readings_from(
+        &mut self,
+        readings_m: &[f64],
+        start: Start,
+    ) -> Result<TendonReport, ModelError> {
+        self.check_readings(readings_m)?;
+        let p = self.driven.len();
+        for (i, reading) in readings_m.iter().enumerate() {
+            let q = reading - self.mech[i].zero_offset_m;
+            self.free[i] = self.free0[i] - q;
+            // friction direction: the way the tendon last moved beyond the deadband
+            let dq = q - self.last_q[i];
+            if self.mu > 0.0 && dq.abs() > self.deadband {
+                self.sign[i] = if dq > 0.0 { -1.0 } else { 1.0 };
+            }
+            if self.mu == 0.0 || dq.abs() > self.deadband {
+                self.last_q[i] = q;
+            }
+        }
+        let mut start = if self.has_solution {
+            start
+        } else {
+            Start::Cold
+        };
+        if start == Start::Cold {
+            for i in 0..p {
+                self.t[i] = self.mech[i].pretension_n;
+            }
+        }
+        self.report = TendonReport {
+            status: SolveStatus::MaxIterations,
+            iterations: 0,
+            residual_m: f64::INFINITY,
+            forward_solves: 0,
+            slack: 0,
+        };
+        // the point T: shooting solve, factors, lengths, sensitivities, residual
+        if !self.evaluate(start, true) {
+            start = Start::Cold;
+            if !self.evaluate(start, true) {
+                return Ok(self.finish());
+            }
+        }
+        let mut merit = self.merit();
+        let mut need_fresh = true;
+        self.lu_ok = false;
+        for it in 0..self.settings.max_iterations {
+            self.report.iterations = it;
+            let friction_settled = self.refresh_factors();
+            if !friction_settled {
+                // the factors moved (lagged friction coupling): re-solve at the same
+                // tensions so that G belongs to the new factors
+                if !self.evaluate(Start::Warm, false) {
+                    return Ok(self.finish());
+                }
+                merit = self.merit();
+            }
+            if merit <= self.settings.tolerance_m && friction_settled {
+                self.report.status = SolveStatus::Converged;
+                return Ok(self.finish());
+            }
+            // a chord step reuses the last factorised Jacobian; a fresh sweep when
+            // the last step did not contract enough or the active set changed
+            if !self.lu_ok || need_fresh {
+                if !self.sens_fresh && !self.evaluate(Start::Warm, true) {
+                    return Ok(self.finish());
+                }
+                if !self.newton_step() {
+                    self.report.status = SolveStatus::IllConditioned;
+                    return Ok(self.finish());
+                }
+                self.lu_ok = true;
+            } else {
+                self.chord_step();
+            }
+            let merit_before = merit;
+            let taut_before = self.taut_mask();
+            // projected backtracking line search on max |G|
+            self.t_trial.copy_from_slice(&self.t);
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            for _ in 0..12 {
+                for i in 0..p {
+                    self.t[i] = (self.t_trial[i] + alpha * self.step[i]).max(0.0);
+                }
+                if self.evaluate(Start::Warm, false) {
+                    let m = self.merit();
+                    if m < merit || m <= self.settings.tolerance_m {
+                        merit = m;
+                        accepted = true;
+                        break;
+                    }
+                }
+                alpha *= 0.5;
+                if !self.sens_fresh && self.lu_ok && !need_fresh {
+                    // a chord step that needs damping: retry with a fresh Jacobian
+                    break;
+                }
+            }
+            need_fresh = !accepted || merit > 0.1 * merit_before || self.taut_mask() != taut_before;
+            if !accepted && !self.lu_was_fresh() {
+                self.t.copy_from_slice(&self.t_trial);
+                if !self.evaluate(Start::Warm, true) {
+                    return Ok(self.finish());
+                }
+                merit = self.merit();
+                self.lu_ok = false;
+                continue;
+            }
+            if !accepted {
+                self.t.copy_from_slice(&self.t_trial);
+                self.evaluate(Start::Warm, false);
+                self.report.status = SolveStatus::Stalled;
+                return Ok(self.finish());
+            }
+        }
+        self.report.iterations = self.settings.max_iterations;
+        if self.merit() <= self.settings.tolerance_m && self.refresh_factors() {
+            self.report.status = SolveStatus::Converged;
+        }
+        Ok(self.finish())
+    }
+
+    fn finish(&mut self) -> TendonReport {
+        self.report.residual_m = self.merit();
+        self.report.slack = self.taut.iter().filter(|t| !**t).count();
+        self.has_solution = self.report.status.is_converged() || self.has_solution;
+        self.report
+    }
+
+    fn merit(&self) -> f64 {
+        self.g.iter().fold(0.0, |m, g| m.max(g.abs()))
+    }
+
+    /// Shooting solve at the current tensions, then lengths, sensitivities and `G`.
+    /// `false` when the shooting solve or the sweep failed.
+    fn evaluate(&mut self, start: Start, sweep: bool) -> bool {
+        let p = self.driven.len();
+        self.theta[..p].copy_from_slice(&self.t);
+        // first-order predictor of the shooting unknowns from the last sweep
+        self.ws.set_theta_predicted(&self.theta);
+        self.report.forward_solves += 1;
+        let rep = self.ws.solve(start);
+        if !rep.status.is_converged() {
+            self.report.status = rep.status;
+            return false;
+        }
+        if sweep {
+            if !self
+                .ws
+                .length_sensitivities(&mut self.sens, &mut self.lengths)
+            {
+                self.report.status = SolveStatus::IllConditioned;
+                return false;
+            }
+            self.sens_fresh = true;
+        } else {
+            self.ws.cable_lengths_into(&mut self.lengths);
+            self.sens_fresh = false;
+        }
+        for i in 0..p {
+            let j = self.driven[i];
+            let m = &self.mech[i];
+            let covered = m.covered(self.free[i], self.t[i], self.mean_factor[i]);
+            let stretch_gap = covered - self.lengths[j];
+            let a = m.compliance(self.free[i], self.mean_factor[i]) + self.geo[i];
+            let slack_arm = a * self.t[i];
+            // taut branch when the constitutive gap is the smaller argument of min
+            self.taut[i] = stretch_gap <= slack_arm && (self.t[i] > 0.0 || stretch_gap < 0.0);
+            self.g[i] = stretch_gap.min(slack_arm);
+        }
+        true
+    }
+
+    /// Bit mask of taut tendons (for detecting a change of the active set).
+    fn taut_mask(&self) -> u64 {
+        self.taut
+            .iter()
+            .enumerate()
+            .fold(0, |m, (i, t)| if *t { m | (1 << (i % 64)) } else { m })
+    }
+
+    /// Whether the factorised Jacobian came from a sweep at the step's start point.
+    fn lu_was_fresh(&self) -> bool {
+        self.lu_fresh_at_step
+    }
+
+    /// Step with the factorised Jacobian of an earlier point (chord Newton).
+    fn chord_step(&mut self) {
+        self.lu_fresh_at_step = false;
+        for (s, g) in self.step.iter_mut().zip(&self.g) {
+            *s = -g;
+        }
+        self.lu.solve_in_place(&mut self.step);
+    }
+
+    /// Semi-smooth Newton step `J step = -G` with the generalized Jacobian.
+    fn newton_step(&mut self) -> bool {
+        self.lu_fresh_at_step = true;
+        let p = self.driven.len();
+        let np = self.theta.len();
+        let a = self.lu.matrix_mut();
+        for i in 0..p {
+            let j = self.driven[i];
+            let m = &self.mech[i];
+            let c = m.compliance(self.free[i], self.mean_factor[i]);
+            for k in 0..p {
+                a[i * p + k] = if self.taut[i] {
+                    -self.sens[j * np + k] + if i == k { c } else { 0.0 }
+                } else if i == k {
+                    c + self.geo[i]
+                } else {
+                    0.0
+                };
+            }
+        }
+        if self.lu.factor().is_none() {
+            return false;
+        }
+        for i in 0..p {
+            self.step[i] = -self.g[i];
+        }
+        self.lu.solve_in_place(&mut self.step);
+        self.step.iter().all(|s| s.is_finite())
+    }
+
+    /// Capstan factors from the current shape; `true` when they did not change.
+    fn refresh_factors(&mut self) -> bool {
+        if self.mu == 0.0 {
+            return true;
+        }
+        let axis = self.ws.robot().base_rotation() * Vector3::z();
+        let mut settled = true;
+        for i in 0..self.driven.len() {
+            let j = self.driven[i];
+            let base = self.ws.base_hole_world(j);
+            let holes = self.ws.cable_holes(j);
+            let f = &mut self.factors[i];
+            capstan_factors(self.mu, self.sign[i], &axis, &base, holes, f);
+            let old = self.ws.chord_factors(j);
+            if old.iter().zip(f.iter()).any(|(a, b)| (a - b).abs() > 1e-13) {
+                settled = false;
+            }
+            // length-weighted mean factor of the chords, for the stretch
+            let (mut prev, mut total, mut weighted) = (base, 0.0, 0.0);
+            for (h, fk) in holes.iter().zip(f.iter()) {
+                let l = (h - prev).norm();
+                total += l;
+                weighted += l * fk;
+                prev = *h;
+            }
+            self.mean_factor[i] = if total > 0.0 { weighted / total } else { 1.0 };
+            self.ws.set_chord_factors(j, &self.factors[i]);
+        }
+        settled
+    }
+}

@@ -1,0 +1,149 @@
+//! Serializable tendon description: how each cable is actuated, its mechanics
+//! (stretch, series spring, pretension), its own hole routing, and friction.
+//!
+//! Units: N for `stiffness_n` (the axial stiffness `EA_t` of the tendon, so strain 1
+//! costs `EA_t` newtons), N/m for the series spring, N for tensions, m and degrees for
+//! holes, and the capstan coefficient `mu` is dimensionless.
+
+use crate::error::ModelError;
+use serde::{Deserialize, Serialize};
+
+/// How a cable is driven (scene key `actuation`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Actuation {
+    /// A given tension (`loads.tensions_n`), as a force-controlled actuator or a
+    /// hanging weight. The default, and the behaviour before tendons existed.
+    #[default]
+    Tension,
+    /// A measuring cable: zero tension, its length is only read.
+    Passive,
+    /// Position-controlled: the actuator reading `q` (m, positive = pulled) sets the
+    /// tendon's free length `L0 - q`; the tension follows from the shape
+    /// ([`crate::tendons::TendonWorkspace`]).
+    Displacement,
+}
+
+/// Mechanics of a tendon (scene `[robot.tendons]` for every cable, or per cable
+/// `tendon = { .. }`, which overrides field by field).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TendonSpec {
+    /// Axial stiffness `EA_t` of the tendon (N), > 0; `inf` is an inextensible
+    /// tendon. Required for displacement-driven tendons (no default: a braided
+    /// polymer line and a steel wire differ a hundredfold).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_n: Option<f64>,
+    /// Stiffness of a spring in series at the actuator (N/m), > 0; default none
+    /// (infinitely stiff). Also the place for the compliance of the tendon's lead
+    /// outside the robot and of the servo horn.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub series_stiffness_n_per_m: Option<f64>,
+    /// Tension at reading `q = 0` (N), >= 0; default 0 (just taut). It fixes the
+    /// free length `L0` (see [`crate::tendons::TendonWorkspace`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pretension_n: Option<f64>,
+    /// Encoder zero offset (m): the reading that corresponds to `q = 0`. Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub zero_offset_m: Option<f64>,
+}
+
+impl TendonSpec {
+    /// Field-by-field override: `self`'s values win over `defaults`.
+    pub fn or(&self, defaults: &TendonSpec) -> TendonSpec {
+        TendonSpec {
+            stiffness_n: self.stiffness_n.or(defaults.stiffness_n),
+            series_stiffness_n_per_m: self
+                .series_stiffness_n_per_m
+                .or(defaults.series_stiffness_n_per_m),
+            pretension_n: self.pretension_n.or(defaults.pretension_n),
+            zero_offset_m: self.zero_offset_m.or(defaults.zero_offset_m),
+        }
+    }
+
+    /// Check every given value; `field` is the table's path.
+    pub fn validate(&self, field: &str) -> Result<(), ModelError> {
+        if let Some(ea) = self.stiffness_n {
+            if ea.is_nan() || ea <= 0.0 {
+                return Err(ModelError::NonPositive {
+                    field: format!("{field}.stiffness_n"),
+                    value: ea,
+                });
+            }
+        }
+        if let Some(k) = self.series_stiffness_n_per_m {
+            if k.is_nan() || k <= 0.0 {
+                return Err(ModelError::NonPositive {
+                    field: format!("{field}.series_stiffness_n_per_m"),
+                    value: k,
+                });
+            }
+        }
+        if let Some(t) = self.pretension_n {
+            ModelError::non_negative(format!("{field}.pretension_n"), t)?;
+        }
+        if let Some(z) = self.zero_offset_m {
+            ModelError::finite(format!("{field}.zero_offset_m"), z)?;
+        }
+        Ok(())
+    }
+}
+
+/// A tendon's own hole, used on every disk it passes and on the base plate
+/// (scene `routing = { radius_m, angle_deg, offsets_deg }`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoutingSpec {
+    /// Distance of the hole from the backbone axis (m), >= 0.
+    pub radius_m: f64,
+    /// Hole angle (degrees) from local `+x` towards `+y`.
+    pub angle_deg: f64,
+    /// Extra angle (degrees) on the disks of section `k` (`offsets_deg[k]`, missing
+    /// entries 0): a tendon that is re-routed between sections. The base plate uses
+    /// section 0's angle.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub offsets_deg: Vec<f64>,
+}
+
+impl RoutingSpec {
+    /// Hole angle (rad) on the disks of section `k`.
+    pub fn angle_rad(&self, section: usize) -> f64 {
+        (self.angle_deg + self.offsets_deg.get(section).copied().unwrap_or(0.0)).to_radians()
+    }
+
+    /// Check the numbers; `field` is the table's path.
+    pub fn validate(&self, field: &str) -> Result<(), ModelError> {
+        ModelError::non_negative(format!("{field}.radius_m"), self.radius_m)?;
+        ModelError::finite(format!("{field}.angle_deg"), self.angle_deg)?;
+        for (k, o) in self.offsets_deg.iter().enumerate() {
+            ModelError::finite(format!("{field}.offsets_deg[{k}]"), *o)?;
+        }
+        Ok(())
+    }
+}
+
+/// Tendon-on-disk friction (scene `[robot.friction]`; off when absent).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// Capstan coefficient `mu` (-), >= 0: over a wrap angle `theta` the tension
+    /// changes by the factor `exp(+-mu theta)`.
+    pub mu: f64,
+    /// Reading change (m) below which a tendon keeps the direction it last moved in
+    /// (so encoder noise does not flip the friction). Default 1e-5.
+    #[serde(default = "default_deadband")]
+    pub deadband_m: f64,
+}
+
+fn default_deadband() -> f64 {
+    1e-5
+}
+
+impl FrictionSpec {
+    /// Check the numbers.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        ModelError::non_negative("robot.friction.mu", self.mu)?;
+        ModelError::non_negative("robot.friction.deadband_m", self.deadband_m)?;
+        Ok(())
+    }
+}
