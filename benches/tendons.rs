@@ -1,0 +1,75 @@
+//! Tendon-driven robot benches on the shipped FTDCR v4 scene
+//! (`data/scenes/ftdcr_v4.toml`: three segments, 10 disks each, nine
+//! displacement-driven tendons) and its validation recording
+//! (`data/hardware/ftdcr_v4/val.csv`).
+//!
+//! * `tendon_readings_warm`: `TendonWorkspace::solve_readings` over the recording's
+//!   rows in order, each warm-started from the previous row (the control-loop case).
+//!   One iteration = one row. Issue target: <= 100 us.
+//! * `tendon_readings_cold`: one row solved from the straight rod and the
+//!   pretensions (`Start::Cold`). Issue target: <= 2 ms.
+//! * `tendon_track_row`: a warm row plus its JSON record (what `track` does per row,
+//!   without the write). Issue target: <= 150 us.
+//!
+//! Rows that do not converge during timing are counted on stderr. Log:
+//! `benches/README.md`.
+
+use cablesense::files::readings::ReadingRow;
+use cablesense::{Scene, Start};
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::hint::black_box;
+use std::time::Duration;
+
+fn rows(scene: &Scene, ws: &cablesense::tendons::TendonWorkspace) -> Vec<ReadingRow> {
+    let mut p = scene.readings_parser(ws);
+    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").expect("shipped data");
+    text.lines()
+        .enumerate()
+        .filter_map(|(i, l)| p.line(i + 1, l).ok().flatten())
+        .collect()
+}
+
+fn benches(c: &mut Criterion) {
+    let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let mut ws = scene.tendon_workspace().expect("tendon workspace");
+    let rows = rows(&scene, &ws);
+    let mut g = c.benchmark_group("tendons");
+    g.measurement_time(Duration::from_secs(20)).sample_size(20);
+    let mut k = 0;
+    let mut failed = 0;
+    g.bench_function("tendon_readings_warm", |b| {
+        b.iter(|| {
+            let r = ws.solve_readings(black_box(&rows[k % rows.len()].readings_m));
+            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+            k += 1;
+        })
+    });
+    let row = &rows[rows.len() / 3].readings_m;
+    g.bench_function("tendon_readings_cold", |b| {
+        b.iter(|| {
+            let r = ws.solve_readings_from(black_box(row), Start::Cold);
+            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+        })
+    });
+    g.bench_function("tendon_track_row", |b| {
+        b.iter(|| {
+            let row = &rows[k % rows.len()];
+            let r = ws.solve_readings(&row.readings_m);
+            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+            let tip = ws.tip_position();
+            let rec = serde_json::json!({
+                "line": row.line, "tip_position_m": [tip.x, tip.y, tip.z],
+                "tensions_n": ws.tensions(), "taut": ws.taut(),
+            });
+            black_box(rec.to_string());
+            k += 1;
+        })
+    });
+    g.finish();
+    if failed > 0 {
+        eprintln!("tendon benches: {failed} solves did not converge during timing");
+    }
+}
+
+criterion_group!(group, benches);
+criterion_main!(group);
