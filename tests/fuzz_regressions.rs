@@ -9,6 +9,8 @@
 mod shared;
 #[path = "../fuzz/fuzz_targets/shared_estimate.rs"]
 mod shared_estimate;
+#[path = "../fuzz/fuzz_targets/shared_readings.rs"]
+mod shared_readings;
 #[path = "../fuzz/fuzz_targets/shared_stream.rs"]
 mod shared_stream;
 
@@ -80,4 +82,9 @@ fn encoder_stream_inputs() {
 #[test]
 fn estimator_tick_inputs() {
     replay("estimator_tick", shared_estimate::estimator_tick, 6);
+}
+
+#[test]
+fn readings_stream_inputs() {
+    replay("readings_stream", shared_readings::check_readings, 2);
 }
