@@ -90,7 +90,9 @@ pub struct SolverSettings {
     /// Newton iteration limit per solve (default 50).
     pub max_iterations: usize,
     /// Convergence threshold on the scaled boundary residual's max-norm (default 1e-10).
-    /// Forces are scaled by `EI/L^2`, moments by `EI/L`, positions by `L`.
+    /// Forces are scaled by `EI/L^2`, moments by `EI/L`, positions by `L`. A solve
+    /// raises it to the residual's round-off floor for its robot, integrator and loads
+    /// (`Workspace::residual_floor`, reported as `SolveReport::tolerance`).
     pub tolerance: f64,
     /// Retry a failed cold start by load continuation (default true).
     pub continuation: bool,

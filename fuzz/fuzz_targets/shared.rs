@@ -20,7 +20,7 @@
 use cablesense::robot::{BaseSpec, CableSpec, GuideSpec, HolesSpec, SectionSpec};
 use cablesense::{
     CrossSection, Frame, GuideMass, Integrator, Loads, Material, PointLoad, Robot, RobotSpec,
-    RodModel, Scene, SolverSettings, Start, Workspace,
+    RodModel, Scene, SolveStatus, SolverSettings, Start, Workspace,
 };
 
 /// Solves are skipped for scenes larger than this (parsing and validation still run):
@@ -129,8 +129,27 @@ fn check_workspace(ws: &mut Workspace, what: &str) {
     let mut lengths = vec![f64::NAN; n_cables];
     ws.cable_lengths_into(&mut lengths);
     let tip = ws.tip_position();
-    let tolerance = ws.settings().tolerance;
     let sol = ws.solution();
+    // the tolerance a solve uses is the settings' raised to the residual's round-off
+    // floor, never lower, and never anything but that (README `[numerics]`)
+    let floor = ws.residual_floor();
+    let tolerance = ws.settings().tolerance.max(floor);
+    assert_eq!(
+        report.tolerance.to_bits(),
+        tolerance.to_bits(),
+        "{what}: report {report:?}, settings {}, floor {floor}",
+        ws.settings().tolerance
+    );
+    // a status is a function of the state handed back: converged exactly when its
+    // residual is within the solve's tolerance, unless the branch guard gave a verdict
+    // (`Unstable`, or a checked continuation that did not reach full load)
+    // (the checked continuation runs above load intensity 3, `CERTIFY_INTENSITY`)
+    let verdict = report.status == SolveStatus::Unstable
+        || (ws.settings().branch_guard && ws.load_intensity() > 3.0);
+    assert!(
+        report.status.is_converged() || report.residual > tolerance || verdict,
+        "{what}: {report:?} although residual <= tolerance {tolerance}"
+    );
     if !report.status.is_converged() {
         return;
     }

@@ -487,7 +487,8 @@ fn restore(est: &mut Estimator, st: &mut JointState, target: f64) {
 /// The joint iteration for one sample; leaves the workspace at the returned shape.
 fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus {
     let (n, p) = (st.n, est.p);
-    let tol_r = est.ws.settings().tolerance;
+    // the forward solver's tolerance, at least the residual's round-off floor
+    let tol_r = est.ws.settings().tolerance.max(est.ws.residual_floor());
     let tau = 0.5 * tol_r;
     st.x.copy_from_slice(est.ws.unknowns_vector());
     if !eval(est, st, false) {

@@ -213,6 +213,8 @@ impl<F: Differentiable> RungModel<F> {
                 status: SolveStatus::NonFinite,
                 iterations: 0,
                 residual: f64::INFINITY,
+                // the curvature rungs report no tolerance of the rod's residual
+                tolerance: f64::NAN,
                 rhs_evals: 0,
                 jacobian_evals: 0,
                 continuation_steps: 0,

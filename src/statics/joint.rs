@@ -113,12 +113,10 @@ impl Workspace {
         // the report describes the adopted point (MaxIterations: "best iterate, see
         // `residual`", the closest status for an externally iterated point)
         self.has_solution = res.is_finite();
-        self.report.status = if res <= self.settings.tolerance {
-            SolveStatus::Converged
-        } else {
-            SolveStatus::MaxIterations
-        };
+        self.tol = self.settings.tolerance.max(self.residual_floor());
+        self.report.status = super::status_of(res, self.tol, SolveStatus::MaxIterations);
         self.report.residual = res;
+        self.report.tolerance = self.tol;
         res
     }
 

@@ -6,6 +6,7 @@
 //! tensioned cables. Newton's method with an exact Jacobian from forward-mode dual
 //! numbers, a backtracking line search, warm starts and load continuation.
 
+mod floor;
 mod intensity;
 mod pass;
 mod plan;
@@ -66,6 +67,10 @@ pub struct SolveReport {
     pub iterations: usize,
     /// Max-norm of the scaled boundary residual at the returned point (-).
     pub residual: f64,
+    /// Tolerance the solve used (-): `settings.tolerance`, raised to the round-off
+    /// floor of the residual for this robot, integrator and load when it is below it
+    /// (README `[numerics]`). `Converged` exactly when `residual <= tolerance`.
+    pub tolerance: f64,
     /// ODE right-hand-side evaluations, counting each dual pass once per evaluation.
     pub rhs_evals: u64,
     /// Jacobian evaluations (dual-number passes of up to 6 directions each).

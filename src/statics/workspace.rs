@@ -1,6 +1,7 @@
 //! The reusable solver workspace: buffers sized once per plan, Newton with an exact
 //! dual-number Jacobian, backtracking line search, warm starts, load continuation.
 
+use super::floor::residual_floor;
 use super::intensity::load_intensity;
 use super::pass::{pass, PassBuf, Recording, LOCAL_TOL};
 use super::plan::{ParamSite, Plan};
@@ -117,6 +118,11 @@ pub struct Workspace {
     tip_first: Vector3<f64>,
     /// Load intensity of the last solve.
     last_intensity: f64,
+    /// Tolerance of the current solve: `settings.tolerance` raised to the round-off
+    /// floor of the residual ([`Workspace::residual_floor`]).
+    tol: f64,
+    /// The current solve ended in a branch verdict (a failed checked continuation).
+    branch_verdict: bool,
     dx: Vec<f64>,
     res: Vec<f64>,
     lu: DenseLu,
@@ -160,6 +166,7 @@ impl Workspace {
         let plan = Plan::new(&robot, &loads, &settings, params)?;
         let n = plan.n_unknowns;
         let (p, c) = (params.len(), robot.cables().len());
+        let tolerance = settings.tolerance;
         Ok(Self {
             sens_s: vec![0.0; n * (n + p)],
             sens_m: vec![0.0; c * (n + p)],
@@ -186,6 +193,8 @@ impl Workspace {
             tip_start: Vector3::zeros(),
             tip_first: Vector3::zeros(),
             last_intensity: 0.0,
+            tol: tolerance,
+            branch_verdict: false,
             dx: vec![0.0; n],
             res: vec![0.0; n],
             lu: DenseLu::new(n),
@@ -200,6 +209,7 @@ impl Workspace {
                 status: SolveStatus::NonFinite,
                 iterations: 0,
                 residual: f64::INFINITY,
+                tolerance,
                 rhs_evals: 0,
                 jacobian_evals: 0,
                 continuation_steps: 0,
@@ -401,6 +411,8 @@ impl Workspace {
         // equilibrium already in its first pass (the chords settle elsewhere), which no
         // check on the Newton path sees: such a step is solved as a checked cold solve
         let intensity = self.load_intensity();
+        self.tol = self.settings.tolerance.max(self.residual_floor());
+        self.branch_verdict = false;
         if warm
             && self.settings.branch_guard
             && !self.guarded()
@@ -443,12 +455,20 @@ impl Workspace {
             self.b64.local_tol = LOCAL_TOL;
             self.eval_at(false, 1.0);
         }
+        // the status of the state handed back, decided like every other one, unless
+        // the branch guard gave its verdict on this solve
+        let status = if self.branch_verdict {
+            status
+        } else {
+            self.status_here(status)
+        };
         self.has_solution = status.is_converged();
         self.last_intensity = intensity;
         self.report = SolveReport {
             status,
             iterations,
             residual: max_abs(&self.res),
+            tolerance: self.tol,
             rhs_evals: self.rhs_count() - rhs0,
             jacobian_evals: self.jac_evals,
             continuation_steps,
@@ -484,6 +504,8 @@ impl Workspace {
         // stable one from the unloaded rod
         if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
             status = SolveStatus::Unstable;
+            // never hand back the unstable equilibrium as the best full-load iterate
+            self.best_res = f64::INFINITY;
         }
         if !status.is_converged() && self.settings.continuation {
             let (st, it, s) = self.continuation();
@@ -531,6 +553,25 @@ impl Workspace {
     /// weights like forces; see the `intensity` module).
     pub fn load_intensity(&self) -> f64 {
         load_intensity(&self.robot, &self.loads, &self.plan.params, &self.b64.theta)
+    }
+
+    /// Round-off floor of the scaled residual for the current loads and load
+    /// parameters (see the `floor` module): the smallest tolerance a solve uses.
+    pub fn residual_floor(&self) -> f64 {
+        let intensity = self.load_intensity();
+        residual_floor(
+            &self.robot,
+            &self.loads,
+            &self.settings,
+            &self.plan.params,
+            &self.b64.theta,
+            intensity,
+        )
+    }
+
+    /// [`status_of`] the current state (`res`) with this solve's tolerance.
+    fn status_here(&self, stop: SolveStatus) -> SolveStatus {
+        status_of(max_abs(&self.res), self.tol, stop)
     }
 
     fn rhs_count(&self) -> u64 {
@@ -615,7 +656,11 @@ impl Workspace {
                 self.res.copy_from_slice(&self.b64.res);
                 true
             }
-            Err(_) => false,
+            Err(_) => {
+                // no residual at `x`: never leave an older one to decide a status
+                self.res.fill(f64::INFINITY);
+                false
+            }
         }
     }
 
@@ -677,14 +722,14 @@ impl Workspace {
                 self.best_res = max_abs(&self.res);
                 self.x_best.copy_from_slice(&self.x);
             }
-            if max_abs(&self.res) <= self.settings.tolerance {
+            if self.status_here(SolveStatus::Converged).is_converged() {
                 if self.b64.local_tol <= LOCAL_TOL {
-                    return (SolveStatus::Converged, it);
+                    return (self.status_here(SolveStatus::Converged), it);
                 }
                 // confirm with fully settled segments (condensed coupling)
                 self.b64.local_tol = LOCAL_TOL;
                 if !self.eval_at(false, lam) {
-                    return (SolveStatus::NonFinite, it);
+                    return (self.status_here(SolveStatus::NonFinite), it);
                 }
                 continue;
             }
@@ -696,18 +741,18 @@ impl Workspace {
             self.b64.local_tol = (1e-10 * max_abs(&self.res)).clamp(LOCAL_TOL, 1e-9);
             let fresh = !self.lu_valid;
             if fresh && jacobians >= max_iterations {
-                return (SolveStatus::MaxIterations, it);
+                return (self.status_here(SolveStatus::MaxIterations), it);
             }
             it += 1;
             if fresh {
                 jacobians += 1;
                 chord_steps = 0;
                 if !self.jacobian(lam) {
-                    return (SolveStatus::NonFinite, it);
+                    return (self.status_here(SolveStatus::NonFinite), it);
                 }
                 match self.lu.factor() {
                     Some(rc) if rc > 1e-14 => self.lu_valid = true,
-                    _ => return (SolveStatus::IllConditioned, it),
+                    _ => return (self.status_here(SolveStatus::IllConditioned), it),
                 }
             }
             for i in 0..n {
@@ -744,7 +789,7 @@ impl Workspace {
             if !accepted {
                 self.eval_at(false, lam);
                 self.lu_valid = false;
-                return (SolveStatus::Stalled, it);
+                return (self.status_here(SolveStatus::Stalled), it);
             }
             std::mem::swap(&mut self.x, &mut self.x_trial);
             self.res.copy_from_slice(&self.b64.res);
@@ -809,7 +854,7 @@ impl Workspace {
                 lam = target;
                 self.x_ok.copy_from_slice(&self.x);
                 if lam >= 1.0 {
-                    return (SolveStatus::Converged, iterations, steps);
+                    return (self.status_here(st), iterations, steps);
                 }
                 if it <= 4 {
                     step *= 2.0;
@@ -899,6 +944,11 @@ impl Workspace {
         }
         self.x.copy_from_slice(&self.x_ok);
         self.eval_at(false, 1.0);
+        // a branch verdict: the guard could not follow the branch to full load, so no
+        // state of this solve counts as on it, whatever its residual (the partial-load
+        // point evaluated at full load, or the best full-load iterate)
+        self.best_res = f64::INFINITY;
+        self.branch_verdict = true;
         let st = if step < 1e-4 {
             last
         } else {
@@ -1184,6 +1234,24 @@ fn wide_sweeps<const N: usize>(
         b64.mlin_valid = true;
     }
     ok
+}
+
+/// The status of a solve (or of a Newton run inside one) that stops at a state with
+/// max-norm scaled residual `residual`; `stop` is why the iteration stopped. Every
+/// status of this file is decided here, so it is a function of the state handed back:
+/// - `Unstable` (a branch verdict on a converged state: Jacobi's test) stays, and so
+///   does a failed checked continuation's status (`Workspace::solve` skips this then);
+/// - otherwise `Converged` exactly when `residual <= tolerance` (the solve's tolerance,
+///   at least the round-off floor, so a re-evaluation of the same state agrees);
+/// - a path that believed it converged but whose returned state misses the tolerance
+///   (it was re-evaluated after settling) is `Stalled`; any other `stop` stays.
+fn status_of(residual: f64, tolerance: f64, stop: SolveStatus) -> SolveStatus {
+    match stop {
+        SolveStatus::Unstable => stop,
+        _ if residual <= tolerance => SolveStatus::Converged,
+        SolveStatus::Converged => SolveStatus::Stalled,
+        _ => stop,
+    }
 }
 
 fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
