@@ -1,6 +1,7 @@
 //! Files layer: scene files (TOML or JSON) and the thesis reference tables.
 //! The core (everything above this module) never reads files.
 
+pub mod demo;
 pub mod measure;
 mod scene;
 pub mod thesis;

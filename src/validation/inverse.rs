@@ -9,8 +9,7 @@
 
 use super::{FittedFile, Target, ValidationError};
 use crate::estimate::{EstimateSpec, EstimateStatus, Estimator, UnknownKind, UnknownSpec};
-use crate::files::thesis::Table;
-use crate::files::Scene;
+use crate::files::demo::DataSource;
 use std::path::Path;
 
 /// One row of the inverse experiment.
@@ -36,11 +35,16 @@ pub const READING_SIGMA_M: f64 = 1e-3 / 3.464_101_615_137_754_6;
 /// Run the experiment on `dir` (`data/thesis`). Rows with zero mass are skipped
 /// (they define the reference).
 pub fn table_4_5_inverse(dir: &Path) -> Result<Vec<InverseRow>, ValidationError> {
-    let table = Table::load(dir.join("table_4_5.csv"))?;
+    table_4_5_inverse_from(&DataSource::Dir(dir.to_path_buf()))
+}
+
+/// [`table_4_5_inverse`] on a directory on disk or the embedded `data/thesis`.
+pub fn table_4_5_inverse_from(src: &DataSource) -> Result<Vec<InverseRow>, ValidationError> {
+    let table = src.table("table_4_5.csv")?;
     let masses = table.col_si("tip_mass_g")?;
     let deltas = table.col_si("obs_delta_cm")?;
-    let scene = Scene::load(dir.join("table_4_3.toml"))?;
-    let fitted = FittedFile::load(&dir.join("fitted.toml"))?;
+    let scene = src.scene("table_4_3.toml")?;
+    let fitted = FittedFile::load_from(src)?;
     let mut scene = match fitted.get("table_4_3.toml", Target::Predicted) {
         Some(r) => r.apply(&scene)?,
         None => scene,
@@ -51,7 +55,7 @@ pub fn table_4_5_inverse(dir: &Path) -> Result<Vec<InverseRow>, ValidationError>
     }
     let model = |context: &str, e: crate::ModelError| ValidationError::Model {
         context: context.into(),
-        source: e,
+        cause: e,
     };
     let robot = scene
         .build_robot()

@@ -1,6 +1,8 @@
 //! `cablesense estimate SCENE --measure FILE`: a batch of encoder samples.
 
-use crate::stream::{error_json, estimate_json, estimator, parser, process, MODEL_HELP};
+use crate::stream::{
+    error_json, estimate_json, estimator, open_input, parser, process, MODEL_HELP,
+};
 use anyhow::Context;
 use std::io::BufRead;
 use std::path::PathBuf;
@@ -9,11 +11,11 @@ use std::process::ExitCode;
 /// Arguments of `estimate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scene with an [estimate] table.
-    #[arg(default_value = "data/scenes/track_demo.toml")]
+    /// Scene with an [estimate] table (a path or `demo:NAME`).
+    #[arg(default_value = cablesense::files::demo::TRACK_SCENE)]
     scene: PathBuf,
-    /// Encoder samples: CSV with a header, or JSON lines.
-    #[arg(long, default_value = "data/measurements/track_demo.csv")]
+    /// Encoder samples: CSV with a header, or JSON lines (a path or `demo:NAME`).
+    #[arg(long, default_value = cablesense::files::demo::TRACK_INPUT)]
     measure: PathBuf,
     /// One JSON object per sample instead of a table.
     #[arg(long)]
@@ -26,8 +28,7 @@ pub struct Args {
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (scene, mut est) = estimator(&a.scene, &a.model)?;
     let mut p = parser(&scene, &est);
-    let file = std::fs::File::open(&a.measure)
-        .with_context(|| format!("opening {}", a.measure.display()))?;
+    let file = open_input(&a.measure)?;
     let mut bad = 0usize;
     if !a.json {
         let names = est.names().join("  ");
@@ -42,7 +43,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             "line", "t (s)", "status", names
         );
     }
-    for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
+    for (i, line) in file.lines().enumerate() {
         let line = line.with_context(|| format!("reading {}", a.measure.display()))?;
         match p.line(i + 1, &line) {
             Ok(None) => {}

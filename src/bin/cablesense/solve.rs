@@ -12,8 +12,9 @@ use std::process::ExitCode;
 /// Arguments of `solve`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scene file (.toml or .json). Default: the shipped demo robot.
-    #[arg(default_value = "data/scenes/demo_two_section.toml")]
+    /// Scene file (.toml or .json), or `demo:NAME` for a shipped one (`cablesense demo
+    /// list`). Default: the shipped demo robot.
+    #[arg(default_value = cablesense::files::demo::SOLVE_SCENE)]
     scene: PathBuf,
     /// Print JSON (schema in the README) instead of text.
     #[arg(long)]
@@ -53,7 +54,7 @@ pub fn rung_by_label(robot: &cablesense::Robot, label: &str, extra: &str) -> any
 
 /// Run `solve`. Exit code 0 when converged, 1 when the solver did not converge.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let scene = Scene::load(&a.scene)?;
+    let scene = cablesense::files::demo::DataRef::parse(&a.scene)?.scene()?;
     let robot = scene.build_robot()?;
     let (rung, choice) = match a.model.as_str() {
         "scene" => (Rung::Rod(scene.numerics.clone()), None),

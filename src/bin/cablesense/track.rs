@@ -1,7 +1,9 @@
 //! `cablesense track [SCENE]`: streaming estimation, one JSON line per input row.
 
-use crate::stream::{error_json, estimate_json, estimator, parser, process, MODEL_HELP};
-use anyhow::Context;
+use crate::stream::{
+    error_json, estimate_json, estimator, open_input, parser, process, MODEL_HELP,
+};
+use cablesense::files::demo;
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -12,7 +14,7 @@ pub struct Args {
     /// Scene with an [estimate] table. Default: the shipped demo, which also
     /// defaults the input to its recorded stream.
     scene: Option<PathBuf>,
-    /// Read rows from this file instead of standard input.
+    /// Read rows from this file (or `demo:NAME`) instead of standard input.
     #[arg(long)]
     input: Option<PathBuf>,
     #[arg(long, default_value = "scene", help = MODEL_HELP)]
@@ -24,16 +26,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (scene_path, input) = match (a.scene.clone(), a.input.clone()) {
         (Some(s), i) => (s, i),
         (None, i) => (
-            PathBuf::from("data/scenes/track_demo.toml"),
-            Some(i.unwrap_or_else(|| PathBuf::from("data/measurements/track_demo.csv"))),
+            PathBuf::from(demo::TRACK_SCENE),
+            Some(i.unwrap_or_else(|| PathBuf::from(demo::TRACK_INPUT))),
         ),
     };
     let (scene, mut est) = estimator(&scene_path, &a.model)?;
     let mut p = parser(&scene, &est);
     let reader: Box<dyn BufRead> = match &input {
-        Some(f) => Box::new(std::io::BufReader::new(
-            std::fs::File::open(f).with_context(|| format!("opening {}", f.display()))?,
-        )),
+        Some(f) => open_input(f)?,
         None => Box::new(std::io::BufReader::new(std::io::stdin())),
     };
     let stdout = std::io::stdout();
