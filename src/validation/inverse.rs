@@ -8,7 +8,7 @@
 //! reading error is modelled as uniform over 1 mm, sigma = 1 mm / sqrt(12).
 
 use super::{FittedFile, Target, ValidationError};
-use crate::estimate::{EstimateSpec, EstimateStatus, Estimator, UnknownKind, UnknownSpec};
+use crate::estimate::{EstimateSpec, EstimateStatus, Estimator, Fit, UnknownKind, UnknownSpec};
 use crate::files::demo::DataSource;
 use std::path::Path;
 
@@ -25,6 +25,11 @@ pub struct InverseRow {
     pub std_kg: f64,
     /// Estimator status.
     pub status: EstimateStatus,
+    /// Fit quality: one cable for one unknown has no redundancy, so `untestable`
+    /// unless the mass bound stops the fit short of the data (then `poor`).
+    pub fit: Fit,
+    /// RMS of the residual in reading-noise sigmas (-).
+    pub rms_sigma: f64,
     /// The model's deflection at the true mass (m), for comparison.
     pub model_change_m: f64,
 }
@@ -111,6 +116,8 @@ pub fn table_4_5_inverse_from(src: &DataSource) -> Result<Vec<InverseRow>, Valid
             estimate_kg: e.values[0],
             std_kg: e.std_dev[0],
             status,
+            fit: e.fit,
+            rms_sigma: e.rms_sigma,
             model_change_m: model_change,
         });
     }

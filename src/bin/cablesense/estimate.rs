@@ -24,7 +24,8 @@ pub struct Args {
     model: String,
 }
 
-/// Run `estimate`. Exit code 1 if any line was bad or any sample did not converge.
+/// Run `estimate`. Exit code 1 if any line was bad, any sample did not converge or
+/// was a poor fit (residual beyond `poor_fit_rms_sigma` noise sigmas).
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (scene, mut est) = estimator(&a.scene, &a.model)?;
     let mut p = parser(&scene, &est);
@@ -39,8 +40,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             a.model
         );
         println!(
-            "{:>5} {:>8} {:<13} {}  (+- 1 sigma)   tip x y z (mm)",
-            "line", "t (s)", "status", names
+            "{:>5} {:>8} {:<13} {:<16} {}  (+- 1 sigma)   tip x y z (mm)",
+            "line", "t (s)", "status", "fit (rms sigma)", names
         );
     }
     for (i, line) in file.lines().enumerate() {
@@ -49,7 +50,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             Ok(None) => {}
             Ok(Some(s)) => {
                 let e = process(&mut est, &s);
-                if !matches!(e.status, cablesense::estimate::EstimateStatus::Converged) {
+                if !matches!(e.status, cablesense::estimate::EstimateStatus::Converged)
+                    || e.fit == cablesense::estimate::Fit::Poor
+                {
                     bad += 1;
                 }
                 if a.json {
@@ -63,10 +66,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                         .collect();
                     let t = &e.tip.position;
                     println!(
-                        "{:>5} {:>8} {:<13} {}   {:.2} {:.2} {:.2}",
+                        "{:>5} {:>8} {:<13} {:<16} {}   {:.2} {:.2} {:.2}",
                         s.line,
                         s.t_s.map_or("-".into(), |t| format!("{t:.3}")),
                         format!("{:?}", e.status),
+                        format!("{:?} ({:.2})", e.fit, e.rms_sigma),
                         vals.join("  "),
                         t.x * 1e3,
                         t.y * 1e3,
@@ -80,6 +84,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                     println!("{}", error_json(&err));
                 } else {
                     eprintln!("{err}");
+                }
+                if err.fatal {
+                    break;
                 }
             }
         }

@@ -91,6 +91,9 @@ pub fn estimate_json(s: &Sample, e: &Estimate) -> Value {
         "line": s.line,
         "t_s": s.t_s,
         "status": e.status,
+        "fit": e.fit,
+        "rms_sigma": e.rms_sigma,
+        "redundancy": e.redundancy,
         "estimate": values,
         "std_dev": std,
         "covariance": e.covariance,
@@ -111,5 +114,5 @@ pub fn estimate_json(s: &Sample, e: &Estimate) -> Value {
 
 /// JSON line of a bad input line.
 pub fn error_json(e: &LineError) -> Value {
-    json!({"line": e.line, "error": e.to_string(), "field": e.field})
+    json!({"line": e.line, "error": e.to_string(), "field": e.field, "fatal": e.fatal})
 }

@@ -21,7 +21,8 @@ pub struct Args {
     model: String,
 }
 
-/// Run `track`: bad rows produce `{"line": n, "error": ...}` and the stream goes on.
+/// Run `track`: bad rows produce `{"line": n, "error": ...}` and the stream goes on;
+/// a bad CSV header (`"fatal": true`) stops it with exit code 1.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (scene_path, input) = match (a.scene.clone(), a.input.clone()) {
         (Some(s), i) => (s, i),
@@ -56,7 +57,13 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 let e = process(&mut est, &s);
                 writeln!(out, "{}", estimate_json(&s, &e))?;
             }
-            Err(err) => writeln!(out, "{}", error_json(&err))?,
+            Err(err) => {
+                writeln!(out, "{}", error_json(&err))?;
+                if err.fatal {
+                    eprintln!("error: {err}");
+                    return Ok(ExitCode::from(1));
+                }
+            }
         }
         out.flush()?;
     }

@@ -303,7 +303,7 @@ fn print_inverse(dir: &DataSource) -> anyhow::Result<()> {
         cablesense::validation::READING_SIGMA_M * 1e3
     );
     println!(
-        "  {:>9} {:>12} {:>12} {:>14} {:>10} {:>9}  status",
+        "  {:>9} {:>12} {:>12} {:>14} {:>10} {:>9}  status, fit (rms sigma)",
         "truth g", "observed cm", "model cm", "estimate g", "+- 1 sd g", "error %"
     );
     let mut sum = 0.0;
@@ -311,14 +311,16 @@ fn print_inverse(dir: &DataSource) -> anyhow::Result<()> {
         let err = (r.estimate_kg - r.truth_kg) / r.truth_kg * 100.0;
         sum += err.abs();
         println!(
-            "  {:>9.1} {:>12.2} {:>12.3} {:>14.1} {:>10.1} {:>9.1}  {:?}",
+            "  {:>9.1} {:>12.2} {:>12.3} {:>14.1} {:>10.1} {:>9.1}  {:?}, {:?} ({:.2})",
             r.truth_kg * 1e3,
             r.observed_change_m * 1e2,
             r.model_change_m * 1e2,
             r.estimate_kg * 1e3,
             r.std_kg * 1e3,
             err,
-            r.status
+            r.status,
+            r.fit,
+            r.rms_sigma
         );
     }
     if !rows.is_empty() {
