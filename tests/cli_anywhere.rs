@@ -269,3 +269,20 @@ fn poor_fits_are_flagged() {
         text(&o.stdout)
     );
 }
+
+/// `solve --plot` and `track --plot` write three-view SVG figures.
+#[test]
+fn plots_are_written() {
+    let tmp = TempDir::new("plot");
+    let o = run(tmp.path(), &["solve", "--plot", "shape.svg"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let svg = std::fs::read_to_string(tmp.path().join("shape.svg")).unwrap();
+    for v in ["view-xy", "view-xz", "view-yz"] {
+        assert!(svg.contains(&format!("id=\"{v}\"")), "{v}");
+    }
+    let o = run(tmp.path(), &["track", "--plot", "figs"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let svg = std::fs::read_to_string(tmp.path().join("figs/track.svg")).unwrap();
+    assert!(svg.contains("estimated tip path"));
+    assert_eq!(svg.matches("class=\"view\"").count(), 3);
+}

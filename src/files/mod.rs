@@ -4,6 +4,7 @@
 pub mod demo;
 pub mod measure;
 mod scene;
+pub mod svg;
 pub mod thesis;
 
 pub use scene::{Scene, SceneError};

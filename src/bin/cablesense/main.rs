@@ -6,6 +6,7 @@ mod demo;
 mod estimate;
 mod output;
 mod pareto;
+mod plot_track;
 mod progress;
 mod solve;
 mod stability;

@@ -22,6 +22,10 @@ pub struct Args {
     /// Write the backbone samples as CSV to this file.
     #[arg(long)]
     samples: Option<PathBuf>,
+    /// Draw backbone, disks and cables in the xy, xz and yz views to this SVG file
+    /// (rod models).
+    #[arg(long)]
+    plot: Option<PathBuf>,
     /// Forward model: `scene` (the scene's [numerics], the default), `auto` (the
     /// cheapest rung of the ladder within --tol and --tol-cable), or a rung label such
     /// as `cc`, `pcc/point/16`, `kirchhoff/average/rk4-16`, `cosserat/accurate/adaptive-1e-8`.
@@ -139,9 +143,9 @@ fn solve_curvature(
     let report = model.solve(&scene.loads, Start::Cold)?;
     let elapsed = started.elapsed();
     let out = model.output();
-    if a.samples.is_some() {
+    if a.samples.is_some() || a.plot.is_some() {
         eprintln!(
-            "note: --samples needs a rod rung; {} has no backbone samples",
+            "note: --samples and --plot need a rod rung; {} has no backbone samples",
             rung.label()
         );
     }
@@ -203,6 +207,11 @@ fn solve_rod(
     let sol = ws.solution();
     if let Some(p) = &a.samples {
         write_samples_csv(p, &sol.samples).with_context(|| format!("writing {}", p.display()))?;
+    }
+    if let Some(p) = &a.plot {
+        let title = format!("{} ({:?})", a.scene.display(), report.status);
+        let svg = cablesense::files::svg::Figure::shape(title, ws.robot(), &sol).to_svg();
+        std::fs::write(p, svg).with_context(|| format!("writing {}", p.display()))?;
     }
     if a.json {
         let mut out = serde_json::json!({

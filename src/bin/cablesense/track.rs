@@ -19,6 +19,10 @@ pub struct Args {
     input: Option<PathBuf>,
     #[arg(long, default_value = "scene", help = MODEL_HELP)]
     model: String,
+    /// Write DIR/track.svg: the estimated tip path over the recording and the last
+    /// estimated shape (backbone, disks, cables on rod models) in the xy, xz, yz views.
+    #[arg(long, value_name = "DIR")]
+    plot: Option<PathBuf>,
 }
 
 /// Run `track`: bad rows produce `{"line": n, "error": ...}` and the stream goes on;
@@ -37,6 +41,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         Some(f) => open_input(f)?,
         None => Box::new(std::io::BufReader::new(std::io::stdin())),
     };
+    let mut tips = Vec::new();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     for (i, line) in reader.lines().enumerate() {
@@ -56,6 +61,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             Ok(Some(s)) => {
                 let e = process(&mut est, &s);
                 writeln!(out, "{}", estimate_json(&s, &e))?;
+                if a.plot.is_some() && e.status != cablesense::estimate::EstimateStatus::NoData {
+                    tips.push(e.tip.position);
+                }
             }
             Err(err) => {
                 writeln!(out, "{}", error_json(&err))?;
@@ -66,6 +74,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             }
         }
         out.flush()?;
+    }
+    if let Some(dir) = &a.plot {
+        crate::plot_track::write(dir, &scene_path, &mut est, tips)?;
     }
     Ok(ExitCode::SUCCESS)
 }
