@@ -17,7 +17,8 @@
 //!    empty field;
 //! 3. a non-blank, non-comment line consumed silently (`Ok(None)`) other than the one
 //!    CSV header;
-//! 4. a bad line changing what later lines give: replaying the stream with every
+//! 4. a bad line changing what later lines give (a bad CSV header stops the stream:
+//!    every later non-blank line is then an error too): replaying the stream with every
 //!    erroring line removed (same line numbers) must give the same result for every
 //!    other line, with the format fixed to the one the first run detected (detection
 //!    from the first non-blank line is documented, even when that line errors).
@@ -62,7 +63,7 @@ pub fn encoder_stream(data: &[u8]) {
     let detected = format.or_else(|| {
         lines
             .iter()
-            .map(|(_, l)| l.trim())
+            .map(|(_, l)| l.trim_start_matches('\u{feff}').trim())
             .find(|t| !is_blank(t))
             .map(|t| {
                 if t.starts_with('{') {
@@ -125,9 +126,9 @@ fn split_lines(text: &[u8]) -> Vec<(usize, String)> {
     out
 }
 
-/// Blank or comment: the parser must skip these.
+/// Blank or comment: the parser must skip these (a byte-order mark is ignored).
 fn is_blank(line: &str) -> bool {
-    let t = line.trim();
+    let t = line.trim_start_matches('\u{feff}').trim();
     t.is_empty() || t.starts_with('#')
 }
 

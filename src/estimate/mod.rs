@@ -92,6 +92,23 @@ pub enum EstimateStatus {
     NoData,
 }
 
+/// How well an estimate explains its data, judged from the RMS of the weighted cable
+/// residuals `r_j / sigma_j` ([`Estimate::rms_sigma`]) against
+/// [`EstimateSpec::poor_fit_rms_sigma`]. Independent of the [`EstimateStatus`]: a
+/// `converged` estimate can be a poor fit (a model that cannot produce the data).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Fit {
+    /// The residuals are within the threshold: consistent with the stated noise.
+    Good,
+    /// The residuals are beyond the threshold: the model, its parameters or the
+    /// stated noise do not explain the data. Do not trust the values or covariance.
+    Poor,
+    /// As many independent measurements as observable unknowns (no redundancy): any
+    /// data are fitted exactly, so the fit cannot be judged from the residuals.
+    Untestable,
+}
+
 /// Why an estimator could not be built.
 #[derive(Debug, Error)]
 pub enum EstimateError {
@@ -142,6 +159,13 @@ pub struct Estimate {
     pub residual_m: Vec<Option<f64>>,
     /// Weighted least-squares cost `0.5 (sum w r^2 + prior terms)`.
     pub cost: f64,
+    /// RMS over the measured cables of `r_j / sigma_j` (noise sigmas, -); 0 with no
+    /// measurement.
+    pub rms_sigma: f64,
+    /// Measured cables minus the rank: the residual's degrees of freedom.
+    pub redundancy: usize,
+    /// Whether the residual is consistent with the noise ([`Fit`]).
+    pub fit: Fit,
     /// Tip pose of the estimated shape.
     pub tip: Pose,
     /// Section end poses of the estimated shape.
@@ -869,6 +893,26 @@ impl<M: EstimationModel> Estimator<M> {
             })
             .collect();
         let predicted: Vec<f64> = (0..self.c).map(|j| self.len[j] - self.ref_len[j]).collect();
+        let (mut chi2, mut measured_count) = (0.0, 0usize);
+        for (j, pr) in predicted.iter().enumerate() {
+            if self.wts[j] > 0.0 {
+                chi2 += self.wts[j] * (pr - self.meas[j]).powi(2);
+                measured_count += 1;
+            }
+        }
+        let rms_sigma = if measured_count > 0 {
+            (chi2 / measured_count as f64).sqrt()
+        } else {
+            0.0
+        };
+        let redundancy = measured_count.saturating_sub(self.rank);
+        let fit = if !rms_sigma.is_finite() || rms_sigma > self.spec.poor_fit_rms_sigma {
+            Fit::Poor
+        } else if redundancy == 0 {
+            Fit::Untestable
+        } else {
+            Fit::Good
+        };
         let measured: Vec<Option<f64>> = self
             .meas
             .iter()
@@ -901,6 +945,9 @@ impl<M: EstimationModel> Estimator<M> {
             measured_m: measured,
             predicted_m: predicted,
             cost: self.cost,
+            rms_sigma,
+            redundancy,
+            fit,
             tip: section_tips.last().copied().unwrap_or(Pose {
                 position: self.ws.tip_position(),
                 rotation: crate::nalgebra::Matrix3::identity(),

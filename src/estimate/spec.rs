@@ -188,6 +188,14 @@ pub struct EstimateSpec {
     /// status is `stalled`. Raise it for data with known model mismatch.
     #[serde(default = "default_max_rms_sigma")]
     pub max_rms_sigma: f64,
+    /// RMS of the weighted cable residuals `r_j / sigma_j` above which an estimate's
+    /// [`crate::estimate::Fit`] is `poor` (default 3): the data are not explained to
+    /// within the stated noise, so the model, its parameters or `noise_m` are wrong,
+    /// whatever the status says. With a correct model and noise the RMS is about
+    /// `sqrt((cables - rank) / cables)` (0.58 for three cables and two unknowns); 3
+    /// is a chi-square tail probability below 1e-6 for one redundant cable of three.
+    #[serde(default = "default_poor_fit_rms_sigma")]
+    pub poor_fit_rms_sigma: f64,
 }
 
 fn default_noise() -> f64 {
@@ -204,6 +212,9 @@ fn default_rank_tol() -> f64 {
 }
 fn default_max_rms_sigma() -> f64 {
     50.0
+}
+fn default_poor_fit_rms_sigma() -> f64 {
+    3.0
 }
 fn default_true() -> bool {
     true
@@ -223,6 +234,7 @@ impl EstimateSpec {
             rank_tolerance: default_rank_tol(),
             reuse_jacobian: true,
             max_rms_sigma: default_max_rms_sigma(),
+            poor_fit_rms_sigma: default_poor_fit_rms_sigma(),
         }
     }
 
@@ -236,6 +248,7 @@ impl EstimateSpec {
         }
         ModelError::positive("estimate.noise_m", self.noise_m)?;
         ModelError::positive("estimate.max_rms_sigma", self.max_rms_sigma)?;
+        ModelError::positive("estimate.poor_fit_rms_sigma", self.poor_fit_rms_sigma)?;
         if self.max_iterations == 0 || self.max_iterations > 10_000 {
             return Err(ModelError::OutOfRange {
                 field: "estimate.max_iterations".into(),

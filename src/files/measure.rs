@@ -6,6 +6,13 @@
 //! JSON lines: `{"t_s": 0.1, "changes_m": [1e-4, null, 2e-4], "sigma_m": [...]}`;
 //! `null` is missing. A malformed or non-finite value is an error for that line
 //! only (naming the line and the field); the stream goes on.
+//!
+//! Lines may end in CRLF, and the first may start with a UTF-8 byte-order mark
+//! (both are ignored on any line). A CSV header that does not name the columns is
+//! reported once and **stops the stream**: the error is [`LineError::fatal`], and
+//! every later non-blank line gets a short fatal error pointing back at it (a caller
+//! that keeps reading sees no sample from rows whose columns are unknown; the
+//! command-line tools stop at the first fatal error and exit with status 1).
 
 use serde::Deserialize;
 use thiserror::Error;
@@ -33,6 +40,8 @@ pub struct LineError {
     pub field: String,
     /// What is wrong, quoting the value.
     pub why: String,
+    /// The stream cannot go on (a bad CSV header): stop reading.
+    pub fatal: bool,
 }
 
 /// Input format.
@@ -57,6 +66,8 @@ pub struct StreamParser {
     cables: Vec<String>,
     format: Option<Format>,
     columns: Option<Vec<Col>>,
+    /// Line of the bad header that stopped the stream.
+    stopped_at: Option<usize>,
 }
 
 impl StreamParser {
@@ -67,14 +78,30 @@ impl StreamParser {
             cables,
             format,
             columns: None,
+            stopped_at: None,
         }
+    }
+
+    /// The line of the bad CSV header that stopped the stream, if any.
+    pub fn stopped_at(&self) -> Option<usize> {
+        self.stopped_at
     }
 
     /// Parse one line. `Ok(None)` for blank, comment (`#`) and CSV header lines.
     pub fn line(&mut self, line_no: usize, text: &str) -> Result<Option<Sample>, LineError> {
-        let t = text.trim();
+        let t = text.trim_start_matches('\u{feff}').trim();
         if t.is_empty() || t.starts_with('#') {
             return Ok(None);
+        }
+        if let Some(at) = self.stopped_at {
+            return Err(LineError {
+                fatal: true,
+                ..Self::err(
+                    line_no,
+                    "stream",
+                    format!("not read: the stream stopped at the bad header of line {at}"),
+                )
+            });
         }
         let format = *self.format.get_or_insert(if t.starts_with('{') {
             Format::JsonLines
@@ -92,6 +119,16 @@ impl StreamParser {
             line,
             field: field.into(),
             why: why.into(),
+            fatal: false,
+        }
+    }
+
+    /// A fatal header error: the stream stops here.
+    fn header_err(&mut self, line: usize, field: String, why: String) -> LineError {
+        self.stopped_at = Some(line);
+        LineError {
+            fatal: true,
+            ..Self::err(line, field, why)
         }
     }
 
@@ -110,19 +147,17 @@ impl StreamParser {
                 {
                     Col::Sigma(j)
                 } else {
-                    return Err(Self::err(
-                        line,
-                        format!("header `{c}`"),
-                        format!(
-                            "not t_s, a cable name ({}) or sigma_<cable>",
-                            self.cables.join(", ")
-                        ),
-                    ));
+                    let why = format!(
+                        "not t_s, a cable name ({}) or sigma_<cable>; the stream stops here",
+                        self.cables.join(", ")
+                    );
+                    return Err(self.header_err(line, format!("header `{c}`"), why));
                 };
                 cols.push(col);
             }
             if !cols.iter().any(|c| matches!(c, Col::Change(_))) {
-                return Err(Self::err(line, "header", "no cable column"));
+                let why = "no cable column; the stream stops here".to_string();
+                return Err(self.header_err(line, "header".into(), why));
             }
             self.columns = Some(cols);
             return Ok(None);
@@ -258,6 +293,37 @@ mod tests {
         let e = p.line(4, "0.3,NaN,1").unwrap_err();
         assert!(e.to_string().contains("not finite"), "{e}");
         assert!(p.line(5, "0.4,1e-4,2e-4").unwrap().is_some());
+    }
+
+    /// A UTF-8 byte-order mark and CRLF endings (as `str::lines` leaves them when
+    /// the text is split on `\n` only) are accepted.
+    #[test]
+    fn bom_and_crlf() {
+        let mut p = parser();
+        assert_eq!(p.line(1, "\u{feff}t_s,a,b\r").unwrap(), None);
+        let s = p.line(2, "0.1,1e-4,2e-4\r").unwrap().unwrap();
+        assert_eq!(s.changes_m, vec![1e-4, 2e-4]);
+        let mut p = parser();
+        let s = p
+            .line(1, "\u{feff}{\"changes_m\": [1e-4, 2e-4]}\r")
+            .unwrap()
+            .unwrap();
+        assert_eq!(s.changes_m, vec![1e-4, 2e-4]);
+    }
+
+    /// A bad header is reported once as fatal; later rows are not read as headers.
+    #[test]
+    fn bad_header_stops_the_stream() {
+        let mut p = parser();
+        let e = p.line(1, "t_s,a,zz").unwrap_err();
+        assert!(e.fatal && e.field == "header `zz`", "{e}");
+        assert_eq!(p.stopped_at(), Some(1));
+        assert_eq!(p.line(2, "").unwrap(), None);
+        let e = p.line(3, "0.1,1e-4,2e-4").unwrap_err();
+        assert!(e.fatal && e.field == "stream", "{e}");
+        assert!(!e.to_string().contains("header `0.1`"), "{e}");
+        // a valid header later does not restart it
+        assert!(p.line(4, "t_s,a,b").unwrap_err().fatal);
     }
 
     #[test]

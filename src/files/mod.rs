@@ -1,9 +1,11 @@
 //! Files layer: scene files (TOML or JSON) and the thesis reference tables.
 //! The core (everything above this module) never reads files.
 
+pub mod demo;
 pub mod measure;
 pub mod readings;
 mod scene;
+pub mod svg;
 pub mod thesis;
 
 pub use scene::{Scene, SceneError};

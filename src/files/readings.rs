@@ -112,6 +112,8 @@ impl ReadingsParser {
             line,
             field: field.into(),
             why: why.into(),
+            // a bad header is not fatal here: the parser waits for the next valid one
+            fatal: false,
         }
     }
 

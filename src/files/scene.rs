@@ -40,12 +40,13 @@ pub struct Scene {
 #[derive(Debug, Error)]
 pub enum SceneError {
     /// The file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}: {cause}")]
     Io {
         /// File.
         path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
+        /// Cause (part of the message, so not also a `source()`: printers of error
+        /// chains would show it twice).
+        cause: std::io::Error,
     },
     /// TOML syntax or schema error (the message names the key and line).
     #[error("{path}: {message}")]
@@ -64,12 +65,12 @@ pub enum SceneError {
         message: String,
     },
     /// Parsed, but a value is invalid.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Invalid {
         /// File.
         path: PathBuf,
-        /// The offending field and value.
-        source: ModelError,
+        /// The offending field and value (part of the message, not a `source()`).
+        cause: ModelError,
     },
 }
 
@@ -91,17 +92,22 @@ impl Scene {
     /// Read a `.toml` or `.json` file (by extension; anything else is tried as TOML).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let text = std::fs::read_to_string(path).map_err(|cause| SceneError::Io {
             path: path.into(),
-            source,
+            cause,
         })?;
-        let scene = if path
+        let json = path
             .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-        {
-            Self::from_json_str(&text)
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        Self::parse_validated(&text, path, json)
+    }
+    /// Parse TOML (or JSON when `json`) text and validate it, naming `path` in errors
+    /// (what [`Scene::load`] does after reading the file).
+    pub fn parse_validated(text: &str, path: &Path, json: bool) -> Result<Self, SceneError> {
+        let scene = if json {
+            Self::from_json_str(text)
         } else {
-            Self::from_toml_str(&text)
+            Self::from_toml_str(text)
         };
         let scene = scene.map_err(|e| match e {
             SceneError::Toml { message, .. } => SceneError::Toml {
@@ -114,9 +120,9 @@ impl Scene {
             },
             other => other,
         })?;
-        scene.validate().map_err(|source| SceneError::Invalid {
+        scene.validate().map_err(|cause| SceneError::Invalid {
             path: path.into(),
-            source,
+            cause,
         })?;
         Ok(scene)
     }

@@ -18,12 +18,12 @@ pub struct Table {
 #[derive(Debug, Error)]
 pub enum TableError {
     /// I/O.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}: {cause}")]
     Io {
         /// File.
         path: String,
-        /// Cause.
-        source: std::io::Error,
+        /// Cause (part of the message, so not also a `source()`).
+        cause: std::io::Error,
     },
     /// A cell is not a number, or a row has the wrong width.
     #[error("{path}:{line}: {why}")]
@@ -87,9 +87,9 @@ impl Table {
     /// Read a CSV file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, TableError> {
         let p = path.as_ref();
-        let text = std::fs::read_to_string(p).map_err(|source| TableError::Io {
+        let text = std::fs::read_to_string(p).map_err(|cause| TableError::Io {
             path: p.display().to_string(),
-            source,
+            cause,
         })?;
         Self::parse(&text, &p.display().to_string())
     }

@@ -19,13 +19,13 @@ use crate::statics::{Solution, SolveStatus, Start, Workspace};
 /// previous row and retried cold if that fails. Non-convergence is not an error:
 /// each solution carries its [`SolveStatus`].
 pub fn simulate(data: &TableData, scene: &Scene) -> Result<Vec<Solution>, ValidationError> {
-    let model = |source| ValidationError::Model {
+    let model = |cause| ValidationError::Model {
         context: format!(
             "table {} with scene {}",
             data.table,
             data.scene_path.display()
         ),
-        source,
+        cause,
     };
     let robot = scene.build_robot().map_err(model)?;
     let first = data.row_loads(scene, 0)?;
@@ -178,7 +178,7 @@ pub fn compare(data: &TableData, scene: &Scene) -> Result<Comparison, Validation
             .map(|c| c.total_m)
             .ok_or_else(|| ValidationError::Model {
                 context: format!("table {}", data.table),
-                source: crate::ModelError::BadIndex {
+                cause: crate::ModelError::BadIndex {
                     field: "lengths.cable".into(),
                     index: cable,
                     count: sol.cables.len(),

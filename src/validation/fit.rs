@@ -232,9 +232,9 @@ impl FitProblem {
             .zip(values.iter().copied())
             .collect();
         let scene = set_params(&self.scene, &pairs)?;
-        scene.validate().map_err(|source| ValidationError::Model {
+        scene.validate().map_err(|cause| ValidationError::Model {
             context: format!("scene with {}", describe(&self.params, values)),
-            source,
+            cause,
         })?;
         Ok(scene)
     }

@@ -6,6 +6,7 @@
 use super::fit::{FitReport, Target};
 use super::param::{set_params, ParamPath};
 use super::ValidationError;
+use crate::files::demo::DataSource;
 use crate::files::Scene;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -74,6 +75,9 @@ pub struct FitRun {
     pub std_errors: Vec<f64>,
 }
 
+/// Name of the fitted values file in a data directory.
+pub const FITTED_FILE: &str = "fitted.toml";
+
 impl FittedFile {
     /// Parse TOML text.
     pub fn parse(text: &str) -> Result<Self, ValidationError> {
@@ -87,6 +91,16 @@ impl FittedFile {
                 .map_err(|e| ValidationError::Fitted(format!("{}: {e}", path.display()))),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Self::default()),
             Err(e) => Err(ValidationError::Fitted(format!("{}: {e}", path.display()))),
+        }
+    }
+
+    /// `fitted.toml` of a data directory on disk or embedded; missing is empty.
+    pub fn load_from(src: &DataSource) -> Result<Self, ValidationError> {
+        match src.optional_text(FITTED_FILE)? {
+            Some((text, path)) => {
+                Self::parse(&text).map_err(|e| ValidationError::Fitted(format!("{path}: {e}")))
+            }
+            None => Ok(Self::default()),
         }
     }
 

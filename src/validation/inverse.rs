@@ -8,9 +8,8 @@
 //! reading error is modelled as uniform over 1 mm, sigma = 1 mm / sqrt(12).
 
 use super::{FittedFile, Target, ValidationError};
-use crate::estimate::{EstimateSpec, EstimateStatus, Estimator, UnknownKind, UnknownSpec};
-use crate::files::thesis::Table;
-use crate::files::Scene;
+use crate::estimate::{EstimateSpec, EstimateStatus, Estimator, Fit, UnknownKind, UnknownSpec};
+use crate::files::demo::DataSource;
 use std::path::Path;
 
 /// One row of the inverse experiment.
@@ -26,6 +25,11 @@ pub struct InverseRow {
     pub std_kg: f64,
     /// Estimator status.
     pub status: EstimateStatus,
+    /// Fit quality: one cable for one unknown has no redundancy, so `untestable`
+    /// unless the mass bound stops the fit short of the data (then `poor`).
+    pub fit: Fit,
+    /// RMS of the residual in reading-noise sigmas (-).
+    pub rms_sigma: f64,
     /// The model's deflection at the true mass (m), for comparison.
     pub model_change_m: f64,
 }
@@ -36,11 +40,16 @@ pub const READING_SIGMA_M: f64 = 1e-3 / 3.464_101_615_137_754_6;
 /// Run the experiment on `dir` (`data/thesis`). Rows with zero mass are skipped
 /// (they define the reference).
 pub fn table_4_5_inverse(dir: &Path) -> Result<Vec<InverseRow>, ValidationError> {
-    let table = Table::load(dir.join("table_4_5.csv"))?;
+    table_4_5_inverse_from(&DataSource::Dir(dir.to_path_buf()))
+}
+
+/// [`table_4_5_inverse`] on a directory on disk or the embedded `data/thesis`.
+pub fn table_4_5_inverse_from(src: &DataSource) -> Result<Vec<InverseRow>, ValidationError> {
+    let table = src.table("table_4_5.csv")?;
     let masses = table.col_si("tip_mass_g")?;
     let deltas = table.col_si("obs_delta_cm")?;
-    let scene = Scene::load(dir.join("table_4_3.toml"))?;
-    let fitted = FittedFile::load(&dir.join("fitted.toml"))?;
+    let scene = src.scene("table_4_3.toml")?;
+    let fitted = FittedFile::load_from(src)?;
     let mut scene = match fitted.get("table_4_3.toml", Target::Predicted) {
         Some(r) => r.apply(&scene)?,
         None => scene,
@@ -51,7 +60,7 @@ pub fn table_4_5_inverse(dir: &Path) -> Result<Vec<InverseRow>, ValidationError>
     }
     let model = |context: &str, e: crate::ModelError| ValidationError::Model {
         context: context.into(),
-        source: e,
+        cause: e,
     };
     let robot = scene
         .build_robot()
@@ -107,6 +116,8 @@ pub fn table_4_5_inverse(dir: &Path) -> Result<Vec<InverseRow>, ValidationError>
             estimate_kg: e.values[0],
             std_kg: e.std_dev[0],
             status,
+            fit: e.fit,
+            rms_sigma: e.rms_sigma,
             model_change_m: model_change,
         });
     }

@@ -26,8 +26,8 @@ pub use compare::{
     compare, simulate, Comparison, LengthRow, LengthSummary, PointRow, PointSummary, RowComparison,
 };
 pub use fit::{fit, FitMethod, FitProblem, FitReport, FitSettings, FitStatus, Target};
-pub use fitted::{FitRecord, FitRun, FittedFile, ParamValue, SceneFits};
-pub use inverse::{table_4_5_inverse, InverseRow, READING_SIGMA_M};
+pub use fitted::{FitRecord, FitRun, FittedFile, ParamValue, SceneFits, FITTED_FILE};
+pub use inverse::{table_4_5_inverse, table_4_5_inverse_from, InverseRow, READING_SIGMA_M};
 pub use param::{set_params, ParamPath};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
 
@@ -49,13 +49,16 @@ pub enum ValidationError {
     /// A scene file could not be read.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// A shipped-style data file could not be found or read.
+    #[error(transparent)]
+    Data(#[from] crate::files::demo::DataError),
     /// The scene (after setting parameters or row loads) is invalid.
-    #[error("{context}: {source}")]
+    #[error("{context}: {cause}")]
     Model {
         /// What was being built.
         context: String,
-        /// The invalid field.
-        source: ModelError,
+        /// The invalid field (part of the message, so not also a `source()`).
+        cause: ModelError,
     },
     /// Unknown table name.
     #[error("unknown table `{0}` (known: 4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc)")]

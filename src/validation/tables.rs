@@ -5,7 +5,7 @@
 //! Provenance, OCR repairs and column meanings: `data/thesis/README.md`.
 
 use super::ValidationError;
-use crate::files::thesis::Table;
+use crate::files::demo::DataSource;
 use crate::files::Scene;
 use crate::loads::Loads;
 use std::fmt;
@@ -341,11 +341,17 @@ pub struct TableData {
 impl TableData {
     /// Read the CSV and scene of `table` from `dir` (normally `data/thesis`).
     pub fn load(dir: &Path, table: ThesisTable) -> Result<Self, ValidationError> {
+        Self::load_from(&DataSource::Dir(dir.to_path_buf()), table)
+    }
+
+    /// Read the CSV and scene of `table` from a directory on disk or the embedded
+    /// copy of `data/thesis` ([`DataSource::THESIS`]).
+    pub fn load_from(src: &DataSource, table: ThesisTable) -> Result<Self, ValidationError> {
         let spec = table.spec();
-        let csv_path = dir.join(spec.csv);
-        let scene_path = dir.join(spec.scene);
-        let t = Table::load(&csv_path)?;
-        let scene = Scene::load(&scene_path)?;
+        let csv_path = PathBuf::from(src.file(spec.csv)?.display());
+        let scene_path = PathBuf::from(src.file(spec.scene)?.display());
+        let t = src.table(spec.csv)?;
+        let scene = src.scene(spec.scene)?;
         let path = csv_path.display().to_string();
         let col = |name: &str| {
             t.col_si(name).map_err(|e| match e {

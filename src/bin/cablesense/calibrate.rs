@@ -1,10 +1,11 @@
 //! `cablesense calibrate`: least-squares fit of named scene parameters to the
 //! observed or thesis-predicted columns of the thesis tables.
 
-use crate::validate::{data_dir, parse_tables};
+use crate::validate::{data_dir, fitted_file, parse_tables};
 use anyhow::Context;
+use cablesense::files::demo::DataSource;
 use cablesense::validation::{
-    fit, FitMethod, FitProblem, FitSettings, FittedFile, ParamPath, TableData, Target,
+    fit, FitMethod, FitProblem, FitSettings, ParamPath, TableData, Target, FITTED_FILE,
 };
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -48,14 +49,22 @@ pub struct Args {
 
 /// Run `calibrate`. Exit code 0 when the fit converged, 1 otherwise.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let dir = data_dir(a.data);
-    let fitted_path = a.fitted.unwrap_or_else(|| dir.join("fitted.toml"));
+    let dir = data_dir(a.data)?;
+    // --write needs a file on disk: --fitted, or fitted.toml in a --data directory
+    let fitted_path = match (&a.fitted, &dir) {
+        (Some(p), _) => Some(p.clone()),
+        (None, DataSource::Dir(d)) => Some(d.join(FITTED_FILE)),
+        (None, DataSource::Embedded(_)) => None,
+    };
+    if a.write && fitted_path.is_none() {
+        anyhow::bail!("--write needs a file to write: pass --fitted FILE, or --data DIR (e.g. a copy from `cablesense demo write DIR`, then --data DIR/thesis)");
+    }
     let target: Target = a.target.parse()?;
     let method: FitMethod = a.method.parse()?;
     let tables = parse_tables(&a.tables)?;
     let data: Vec<TableData> = tables
         .iter()
-        .map(|t| TableData::load(&dir, *t))
+        .map(|t| TableData::load_from(&dir, *t))
         .collect::<Result<_, _>>()?;
     let scene_name = data[0].spec.scene;
     if let Some(d) = data.iter().find(|d| d.spec.scene != scene_name) {
@@ -72,7 +81,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         .iter()
         .map(|p| p.parse())
         .collect::<Result<_, _>>()?;
-    let mut fitted = FittedFile::load(&fitted_path)?;
+    let (mut fitted, _) = fitted_file(&dir, fitted_path.as_deref())?;
     // start from the stored fit of this target (other parameters stay fitted too)
     let scene = match fitted.get(scene_name, target) {
         Some(rec) if !a.from_scene => rec.apply(&data[0].scene)?,
@@ -144,9 +153,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
     if a.write {
         fitted.record(scene_name, target, &table_names, &report);
-        std::fs::write(&fitted_path, fitted.to_toml_string())
-            .with_context(|| format!("writing {}", fitted_path.display()))?;
-        println!("wrote {}", fitted_path.display());
+        if let Some(path) = &fitted_path {
+            std::fs::write(path, fitted.to_toml_string())
+                .with_context(|| format!("writing {}", path.display()))?;
+            println!("wrote {}", path.display());
+        }
     }
     Ok(
         if report.status == cablesense::validation::FitStatus::Converged {

@@ -1,6 +1,8 @@
 //! `cablesense estimate SCENE --measure FILE`: a batch of encoder samples.
 
-use crate::stream::{error_json, estimate_json, estimator, parser, process, MODEL_HELP};
+use crate::stream::{
+    error_json, estimate_json, estimator, open_input, parser, process, MODEL_HELP,
+};
 use anyhow::Context;
 use std::io::BufRead;
 use std::path::PathBuf;
@@ -9,11 +11,11 @@ use std::process::ExitCode;
 /// Arguments of `estimate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scene with an [estimate] table.
-    #[arg(default_value = "data/scenes/track_demo.toml")]
+    /// Scene with an [estimate] table (a path or `demo:NAME`).
+    #[arg(default_value = cablesense::files::demo::TRACK_SCENE)]
     scene: PathBuf,
-    /// Encoder samples: CSV with a header, or JSON lines.
-    #[arg(long, default_value = "data/measurements/track_demo.csv")]
+    /// Encoder samples: CSV with a header, or JSON lines (a path or `demo:NAME`).
+    #[arg(long, default_value = cablesense::files::demo::TRACK_INPUT)]
     measure: PathBuf,
     /// One JSON object per sample instead of a table.
     #[arg(long)]
@@ -22,12 +24,12 @@ pub struct Args {
     model: String,
 }
 
-/// Run `estimate`. Exit code 1 if any line was bad or any sample did not converge.
+/// Run `estimate`. Exit code 1 if any line was bad, any sample did not converge or
+/// was a poor fit (residual beyond `poor_fit_rms_sigma` noise sigmas).
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (scene, mut est) = estimator(&a.scene, &a.model)?;
     let mut p = parser(&scene, &est);
-    let file = std::fs::File::open(&a.measure)
-        .with_context(|| format!("opening {}", a.measure.display()))?;
+    let file = open_input(&a.measure)?;
     let mut bad = 0usize;
     if !a.json {
         let names = est.names().join("  ");
@@ -38,17 +40,19 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             a.model
         );
         println!(
-            "{:>5} {:>8} {:<13} {}  (+- 1 sigma)   tip x y z (mm)",
-            "line", "t (s)", "status", names
+            "{:>5} {:>8} {:<13} {:<16} {}  (+- 1 sigma)   tip x y z (mm)",
+            "line", "t (s)", "status", "fit (rms sigma)", names
         );
     }
-    for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
+    for (i, line) in file.lines().enumerate() {
         let line = line.with_context(|| format!("reading {}", a.measure.display()))?;
         match p.line(i + 1, &line) {
             Ok(None) => {}
             Ok(Some(s)) => {
                 let e = process(&mut est, &s);
-                if !matches!(e.status, cablesense::estimate::EstimateStatus::Converged) {
+                if !matches!(e.status, cablesense::estimate::EstimateStatus::Converged)
+                    || e.fit == cablesense::estimate::Fit::Poor
+                {
                     bad += 1;
                 }
                 if a.json {
@@ -62,10 +66,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                         .collect();
                     let t = &e.tip.position;
                     println!(
-                        "{:>5} {:>8} {:<13} {}   {:.2} {:.2} {:.2}",
+                        "{:>5} {:>8} {:<13} {:<16} {}   {:.2} {:.2} {:.2}",
                         s.line,
                         s.t_s.map_or("-".into(), |t| format!("{t:.3}")),
                         format!("{:?}", e.status),
+                        format!("{:?} ({:.2})", e.fit, e.rms_sigma),
                         vals.join("  "),
                         t.x * 1e3,
                         t.y * 1e3,
@@ -79,6 +84,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                     println!("{}", error_json(&err));
                 } else {
                     eprintln!("{err}");
+                }
+                if err.fatal {
+                    break;
                 }
             }
         }

@@ -2,9 +2,11 @@
 //! continuum robots. See the README for the commands and file formats.
 
 mod calibrate;
+mod demo;
 mod estimate;
 mod output;
 mod pareto;
+mod plot_track;
 mod progress;
 mod readings;
 mod solve;
@@ -42,6 +44,8 @@ enum Command {
     Pareto(pareto::Args),
     /// Map where each shooting setting and estimation method stops converging.
     Stability(stability::Args),
+    /// The shipped scenes and data embedded in this binary: list them or copy them out.
+    Demo(demo::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -54,6 +58,7 @@ fn main() -> std::process::ExitCode {
         Command::Track(a) => track::run(a),
         Command::Pareto(a) => pareto::run(a),
         Command::Stability(a) => stability::run(a),
+        Command::Demo(a) => demo::run(a),
     };
     match result {
         Ok(code) => code,

@@ -10,9 +10,10 @@
 use crate::progress;
 use anyhow::Context;
 use cablesense::estimate::{Axis, EstimateSpec, Estimator, UnknownSpec};
+use cablesense::files::demo::{self, DataRef, DataSource};
 use cablesense::ladder::{self, ForwardModel, Rung};
 use cablesense::nalgebra::Vector3;
-use cablesense::validation::{TableData, ThesisTable};
+use cablesense::validation::{TableData, ThesisTable, FITTED_FILE};
 use cablesense::{Loads, PointLoad, Robot, Scene, Start};
 use plotters::prelude::*;
 use std::io::Write;
@@ -23,7 +24,8 @@ use std::time::Instant;
 /// Arguments of `pareto`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scene files. Default: data/scenes/*.toml and data/thesis/*.toml.
+    /// Scene files (paths or `demo:NAME`). Default: the shipped scenes, `demo:scenes/*.toml`
+    /// and `demo:thesis/*.toml` (embedded in the binary).
     scenes: Vec<PathBuf>,
     /// Output directory for pareto.csv and the SVG charts.
     #[arg(long, default_value = "out/pareto")]
@@ -55,18 +57,12 @@ struct Row {
 }
 
 fn default_scenes() -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for dir in ["data/scenes", "data/thesis"] {
-        if let Ok(rd) = std::fs::read_dir(dir) {
-            let mut v: Vec<PathBuf> = rd
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-                .collect();
-            v.sort();
-            out.extend(v);
-        }
-    }
-    out
+    ["scenes", "thesis"]
+        .into_iter()
+        .flat_map(demo::under)
+        .filter(|f| f.path.ends_with(".toml") && !f.path.ends_with(FITTED_FILE))
+        .map(|f| PathBuf::from(format!("{}{}", demo::PREFIX, f.path)))
+        .collect()
 }
 
 /// Unit vector across the rod at the base: along gravity's component normal to the
@@ -293,13 +289,35 @@ fn observed_error(model: &mut dyn ForwardModel, data: &TableData) -> anyhow::Res
     })
 }
 
-fn table_for(scene_path: &Path) -> Option<TableData> {
-    let name = scene_path.file_name()?.to_str()?;
-    let dir = scene_path.parent()?;
-    ThesisTable::ALL
+/// The thesis table (with tip points) whose scene is `scene_path`, read from the
+/// scene's directory (embedded for `demo:thesis/...`). `Ok(None)` when the scene is
+/// not a thesis table's; an error when it is but its table cannot be read.
+fn table_for(scene_path: &Path) -> anyhow::Result<Option<TableData>> {
+    let Some(name) = scene_path.file_name().and_then(|n| n.to_str()) else {
+        return Ok(None);
+    };
+    let Some(t) = ThesisTable::ALL
         .into_iter()
-        .filter(|t| t.spec().scene == name && !t.spec().points.is_empty())
-        .find_map(|t| TableData::load(dir, t).ok())
+        .find(|t| t.spec().scene == name && !t.spec().points.is_empty())
+    else {
+        return Ok(None);
+    };
+    let src = match DataRef::parse(scene_path)? {
+        DataRef::Demo(f) if f.path.starts_with("thesis/") => DataSource::THESIS,
+        DataRef::Demo(_) => return Ok(None),
+        DataRef::Path(p) => DataSource::Dir(
+            p.parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+                .to_path_buf(),
+        ),
+    };
+    Ok(Some(TableData::load_from(&src, t).with_context(|| {
+        format!(
+            "{} is the scene of thesis table {t}, whose data did not load",
+            scene_path.display()
+        )
+    })?))
 }
 
 /// Run `pareto`.
@@ -316,7 +334,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let mut loaded = Vec::new();
     let mut skipped = Vec::new();
     for (si, path) in scenes.iter().enumerate() {
-        match Scene::load(path) {
+        let scene = DataRef::parse(path)
+            .map_err(anyhow::Error::from)
+            .and_then(|r| Ok(r.scene()?));
+        match scene {
             Ok(scene) => {
                 let robot = scene.build_robot()?;
                 loaded.push((si, path, scene, robot));
@@ -327,6 +348,12 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 path.display()
             )),
         }
+    }
+    if loaded.is_empty() {
+        anyhow::bail!(
+            "no scene could be loaded, nothing to measure:\n{}",
+            skipped.join("\n")
+        );
     }
     let total: usize = loaded
         .iter()
@@ -341,7 +368,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .file_stem()
             .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
         let loads = sweep(&robot, &scene.loads);
-        let table = table_for(path);
+        let table = table_for(path)?;
         let mut reference = Rung::reference().build(&robot)?;
         let refm = measure(reference.as_mut(), &loads, 1)?;
         let ladder = ladder::full_ladder(&robot);

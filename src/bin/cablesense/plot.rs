@@ -4,92 +4,50 @@ use cablesense::validation::Comparison;
 use plotters::prelude::*;
 use std::path::Path;
 
-/// Colour of row `k` of `n`: from blue (light load) to red (heavy load).
-fn row_colour(k: usize, n: usize) -> RGBColor {
-    let t = if n > 1 {
-        k as f64 / (n - 1) as f64
-    } else {
-        0.0
-    };
-    RGBColor((40.0 + 200.0 * t) as u8, 60, (230.0 - 190.0 * t) as u8)
-}
-
 /// Predicted backbones (x, y in cm) of every row over the observed and the
-/// thesis-predicted tip points.
+/// thesis-predicted tip points: one `xy` view with equal axis scales, smooth paths
+/// with sub-pixel coordinates (`cablesense::files::svg`).
 pub fn backbones(c: &Comparison, title: &str, path: &Path) -> anyhow::Result<()> {
-    let to_cm = |v: f64| v * 100.0;
-    let mut xs = vec![0.0f64, 40.0];
-    let mut ys = vec![0.0f64, 1.0];
-    for sol in &c.solutions {
-        for s in &sol.samples {
-            xs.push(to_cm(s.r.x));
-            ys.push(to_cm(s.r.y));
-        }
-    }
-    for row in &c.rows {
-        for p in &row.points {
-            xs.extend([to_cm(p.observed[0]), to_cm(p.thesis[0])]);
-            ys.extend([to_cm(p.observed[1]), to_cm(p.thesis[1])]);
-        }
-    }
-    let (x0, x1) = bounds(&xs);
-    let (y0, y1) = bounds(&ys);
-    // equal scales on both axes: the shape is not distorted
-    let width = 900u32;
-    let plot_w = (width - 90) as f64;
-    let height = ((plot_w * (y1 - y0) / (x1 - x0)) as u32 + 110).clamp(260, 1000);
-    let root = SVGBackend::new(path, (width, height)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(46)
-        .build_cartesian_2d(x0..x1, y0..y1)?;
-    chart
-        .configure_mesh()
-        .x_desc("x (cm)")
-        .y_desc("y (cm)")
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()?;
+    use cablesense::files::svg::{ramp, Figure, Item, LegendEntry, Marker, Unit};
+    use cablesense::nalgebra::Vector3;
+    let mut fig = Figure::new(title, Unit::Cm, &[(0, 1)]);
+    fig.panel_px = 820.0;
     let n = c.solutions.len();
     for (k, sol) in c.solutions.iter().enumerate() {
-        let colour = row_colour(k, n);
-        let line = chart.draw_series(LineSeries::new(
-            sol.samples.iter().map(|s| (to_cm(s.r.x), to_cm(s.r.y))),
-            colour.stroke_width(2),
-        ))?;
-        if k == 0 {
-            line.label("ours (backbone)").legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+        fig.items.push(Item::Curve {
+            points: sol.samples.iter().map(|s| s.r).collect(),
+            colour: ramp(k, n),
+            width: 2.0,
+            closed: false,
+        });
+    }
+    for (k, row) in c.rows.iter().enumerate() {
+        for p in &row.points {
+            fig.items.push(Item::Marker {
+                at: Vector3::new(p.observed[0], p.observed[1], 0.0),
+                shape: Marker::Dot,
+                colour: ramp(k, n),
+                size: 4.0,
+            });
+            fig.items.push(Item::Marker {
+                at: Vector3::new(p.thesis[0], p.thesis[1], 0.0),
+                shape: Marker::Cross,
+                colour: "black".into(),
+                size: 5.0,
             });
         }
     }
-    for (k, row) in c.rows.iter().enumerate() {
-        let colour = row_colour(k, n);
-        for p in &row.points {
-            let obs = (to_cm(p.observed[0]), to_cm(p.observed[1]));
-            let th = (to_cm(p.thesis[0]), to_cm(p.thesis[1]));
-            let first = k == 0 && p.observed == row.points[0].observed;
-            let a = chart.draw_series(std::iter::once(Circle::new(obs, 5, colour.filled())))?;
-            if first {
-                a.label("observed tip")
-                    .legend(move |(x, y)| Circle::new((x + 10, y), 5, colour.filled()));
-            }
-            let b = chart.draw_series(std::iter::once(Cross::new(th, 6, BLACK.stroke_width(1))))?;
-            if first {
-                b.label("thesis predicted")
-                    .legend(|(x, y)| Cross::new((x + 10, y), 6, BLACK.stroke_width(1)));
-            }
-        }
-    }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
+    fig.legend = vec![
+        LegendEntry {
+            label: "ours (backbone), light to heavy load: blue to red".into(),
+            colour: ramp(0, 2),
+        },
+        LegendEntry {
+            label: "observed tip (dots), thesis predicted (black crosses)".into(),
+            colour: "black".into(),
+        },
+    ];
+    std::fs::write(path, fig.to_svg())?;
     Ok(())
 }
 

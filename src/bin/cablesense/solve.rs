@@ -12,8 +12,9 @@ use std::process::ExitCode;
 /// Arguments of `solve`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scene file (.toml or .json). Default: the shipped demo robot.
-    #[arg(default_value = "data/scenes/demo_two_section.toml")]
+    /// Scene file (.toml or .json), or `demo:NAME` for a shipped one (`cablesense demo
+    /// list`). Default: the shipped demo robot.
+    #[arg(default_value = cablesense::files::demo::SOLVE_SCENE)]
     scene: PathBuf,
     /// Print JSON (schema in the README) instead of text.
     #[arg(long)]
@@ -21,6 +22,10 @@ pub struct Args {
     /// Write the backbone samples as CSV to this file.
     #[arg(long)]
     samples: Option<PathBuf>,
+    /// Draw backbone, disks and cables in the xy, xz and yz views to this SVG file
+    /// (rod models).
+    #[arg(long)]
+    plot: Option<PathBuf>,
     /// Forward model: `scene` (the scene's [numerics], the default), `auto` (the
     /// cheapest rung of the ladder within --tol and --tol-cable), or a rung label such
     /// as `cc`, `pcc/point/16`, `kirchhoff/average/rk4-16`, `cosserat/accurate/adaptive-1e-8`.
@@ -92,7 +97,7 @@ pub fn rung_by_label(robot: &cablesense::Robot, label: &str, extra: &str) -> any
 
 /// Run `solve`. Exit code 0 when converged, 1 when the solver did not converge.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let scene = Scene::load(&a.scene)?;
+    let scene = cablesense::files::demo::DataRef::parse(&a.scene)?.scene()?;
     if let Some(path) = &a.readings {
         return solve_readings(&a, &scene, path);
     }
@@ -180,9 +185,9 @@ fn solve_curvature(
     let report = model.solve(&scene.loads, Start::Cold)?;
     let elapsed = started.elapsed();
     let out = model.output();
-    if a.samples.is_some() {
+    if a.samples.is_some() || a.plot.is_some() {
         eprintln!(
-            "note: --samples needs a rod rung; {} has no backbone samples",
+            "note: --samples and --plot need a rod rung; {} has no backbone samples",
             rung.label()
         );
     }
@@ -244,6 +249,11 @@ fn solve_rod(
     let sol = ws.solution();
     if let Some(p) = &a.samples {
         write_samples_csv(p, &sol.samples).with_context(|| format!("writing {}", p.display()))?;
+    }
+    if let Some(p) = &a.plot {
+        let title = format!("{} ({:?})", a.scene.display(), report.status);
+        let svg = cablesense::files::svg::Figure::shape(title, ws.robot(), &sol).to_svg();
+        std::fs::write(p, svg).with_context(|| format!("writing {}", p.display()))?;
     }
     if a.json {
         let mut out = serde_json::json!({

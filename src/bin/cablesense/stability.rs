@@ -39,7 +39,7 @@ const TICK_BUDGET_S: f64 = 2.0;
 #[derive(clap::Args)]
 pub struct Args {
     /// Scene file. Default: the shipped track demo (thesis-like rod, 3 cables).
-    #[arg(default_value = "data/scenes/track_demo.toml")]
+    #[arg(default_value = cablesense::files::demo::TRACK_SCENE)]
     scene: PathBuf,
     /// Output directory for stability.csv and stability.svg.
     #[arg(long, default_value = "out/stability")]
@@ -516,7 +516,7 @@ fn estimate_map(
 
 /// Run `stability`.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let scene = Scene::load(&a.scene)?;
+    let scene = cablesense::files::demo::DataRef::parse(&a.scene)?.scene()?;
     let robot = scene.build_robot()?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let mut points = Vec::new();

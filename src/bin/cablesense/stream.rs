@@ -2,6 +2,7 @@
 
 use anyhow::Context;
 use cablesense::estimate::{DynModel, Estimate, Estimator};
+use cablesense::files::demo::DataRef;
 use cablesense::files::measure::{LineError, Sample, StreamParser};
 use cablesense::ladder::Rung;
 use cablesense::Scene;
@@ -17,7 +18,7 @@ pub type SceneEstimator = Estimator<DynModel>;
 /// Build the estimator of a scene that has an `[estimate]` table, on the rung named
 /// by `model` (`scene` or a ladder label).
 pub fn estimator(scene_path: &Path, model: &str) -> anyhow::Result<(Scene, SceneEstimator)> {
-    let scene = Scene::load(scene_path)?;
+    let scene = DataRef::parse(scene_path)?.scene()?;
     let spec = scene.estimate.clone().with_context(|| {
         format!(
             "{}: no [estimate] table: nothing to estimate",
@@ -41,6 +42,16 @@ pub fn estimator(scene_path: &Path, model: &str) -> anyhow::Result<(Scene, Scene
         )
     })?;
     Ok((scene, est))
+}
+
+/// Open an input file (`demo:NAME` for a shipped one) for reading by lines.
+pub fn open_input(arg: &Path) -> anyhow::Result<Box<dyn std::io::BufRead>> {
+    Ok(match DataRef::parse(arg)? {
+        DataRef::Path(p) => Box::new(std::io::BufReader::new(
+            std::fs::File::open(&p).with_context(|| format!("cannot open {}", p.display()))?,
+        )),
+        DataRef::Demo(f) => Box::new(std::io::Cursor::new(f.text.as_bytes())),
+    })
 }
 
 /// A parser for the scene's cable names.
@@ -80,6 +91,9 @@ pub fn estimate_json(s: &Sample, e: &Estimate) -> Value {
         "line": s.line,
         "t_s": s.t_s,
         "status": e.status,
+        "fit": e.fit,
+        "rms_sigma": e.rms_sigma,
+        "redundancy": e.redundancy,
         "estimate": values,
         "std_dev": std,
         "covariance": e.covariance,
@@ -100,5 +114,5 @@ pub fn estimate_json(s: &Sample, e: &Estimate) -> Value {
 
 /// JSON line of a bad input line.
 pub fn error_json(e: &LineError) -> Value {
-    json!({"line": e.line, "error": e.to_string(), "field": e.field})
+    json!({"line": e.line, "error": e.to_string(), "field": e.field, "fatal": e.fatal})
 }

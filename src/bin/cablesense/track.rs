@@ -1,7 +1,9 @@
 //! `cablesense track [SCENE]`: streaming estimation, one JSON line per input row.
 
-use crate::stream::{error_json, estimate_json, estimator, parser, process, MODEL_HELP};
-use anyhow::Context;
+use crate::stream::{
+    error_json, estimate_json, estimator, open_input, parser, process, MODEL_HELP,
+};
+use cablesense::files::demo;
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -14,29 +16,32 @@ pub struct Args {
     /// from the previous row). Default: the shipped demo, which also defaults the
     /// input to its recorded stream.
     scene: Option<PathBuf>,
-    /// Read rows from this file instead of standard input.
+    /// Read rows from this file (or `demo:NAME`) instead of standard input.
     #[arg(long)]
     input: Option<PathBuf>,
     #[arg(long, default_value = "scene", help = MODEL_HELP)]
     model: String,
+    /// Write DIR/track.svg: the estimated tip path over the recording and the last
+    /// estimated shape (backbone, disks, cables on rod models) in the xy, xz, yz views.
+    #[arg(long, value_name = "DIR")]
+    plot: Option<PathBuf>,
 }
 
-/// Run `track`: bad rows produce `{"line": n, "error": ...}` and the stream goes on.
+/// Run `track`: bad rows produce `{"line": n, "error": ...}` and the stream goes on;
+/// a bad CSV header (`"fatal": true`) stops it with exit code 1.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (scene_path, input) = match (a.scene.clone(), a.input.clone()) {
         (Some(s), i) => (s, i),
         (None, i) => (
-            PathBuf::from("data/scenes/track_demo.toml"),
-            Some(i.unwrap_or_else(|| PathBuf::from("data/measurements/track_demo.csv"))),
+            PathBuf::from(demo::TRACK_SCENE),
+            Some(i.unwrap_or_else(|| PathBuf::from(demo::TRACK_INPUT))),
         ),
     };
-    let scene = cablesense::Scene::load(&scene_path)?;
+    let scene = demo::DataRef::parse(&scene_path)?.scene()?;
     if crate::readings::is_tendon_scene(&scene) && scene.estimate.is_none() {
         // servo readings in, shape per row out (the control-loop case)
         let reader: Box<dyn BufRead> = match &input {
-            Some(f) => Box::new(std::io::BufReader::new(
-                std::fs::File::open(f).with_context(|| format!("opening {}", f.display()))?,
-            )),
+            Some(f) => open_input(f)?,
             None => Box::new(std::io::BufReader::new(std::io::stdin())),
         };
         crate::readings::stream(
@@ -51,11 +56,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (scene, mut est) = estimator(&scene_path, &a.model)?;
     let mut p = parser(&scene, &est);
     let reader: Box<dyn BufRead> = match &input {
-        Some(f) => Box::new(std::io::BufReader::new(
-            std::fs::File::open(f).with_context(|| format!("opening {}", f.display()))?,
-        )),
+        Some(f) => open_input(f)?,
         None => Box::new(std::io::BufReader::new(std::io::stdin())),
     };
+    let mut tips = Vec::new();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     for (i, line) in reader.lines().enumerate() {
@@ -75,10 +79,22 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             Ok(Some(s)) => {
                 let e = process(&mut est, &s);
                 writeln!(out, "{}", estimate_json(&s, &e))?;
+                if a.plot.is_some() && e.status != cablesense::estimate::EstimateStatus::NoData {
+                    tips.push(e.tip.position);
+                }
             }
-            Err(err) => writeln!(out, "{}", error_json(&err))?,
+            Err(err) => {
+                writeln!(out, "{}", error_json(&err))?;
+                if err.fatal {
+                    eprintln!("error: {err}");
+                    return Ok(ExitCode::from(1));
+                }
+            }
         }
         out.flush()?;
+    }
+    if let Some(dir) = &a.plot {
+        crate::plot_track::write(dir, &scene_path, &mut est, tips)?;
     }
     Ok(ExitCode::SUCCESS)
 }

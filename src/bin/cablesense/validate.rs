@@ -6,8 +6,9 @@
 mod plot;
 
 use anyhow::Context;
+use cablesense::files::demo::DataSource;
 use cablesense::validation::{
-    compare, Comparison, FitRecord, FittedFile, TableData, Target, ThesisTable,
+    compare, Comparison, FitRecord, FittedFile, TableData, Target, ThesisTable, FITTED_FILE,
 };
 use cablesense::Scene;
 use std::path::{Path, PathBuf};
@@ -16,8 +17,8 @@ use std::process::ExitCode;
 /// Arguments of `validate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Directory with the thesis tables, scenes and fitted.toml.
-    /// Default: `data/thesis` here, else the one in the crate's source tree.
+    /// Directory with the thesis tables, scenes and fitted.toml (`cablesense demo
+    /// write DIR` writes a copy to DIR/thesis). Default: the copy embedded in the binary.
     #[arg(long)]
     data: Option<PathBuf>,
     /// Directory for the SVG figures.
@@ -37,15 +38,22 @@ pub struct Args {
     no_plots: bool,
 }
 
-/// `--data` or the default data directory.
-pub fn data_dir(arg: Option<PathBuf>) -> PathBuf {
-    arg.unwrap_or_else(|| {
-        let here = PathBuf::from("data/thesis");
-        if here.is_dir() {
-            here
-        } else {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("data/thesis")
-        }
+/// `--data` (which must be a directory) or the embedded thesis tables.
+pub fn data_dir(arg: Option<PathBuf>) -> anyhow::Result<DataSource> {
+    Ok(match arg {
+        Some(p) => DataSource::dir(p)?,
+        None => DataSource::THESIS,
+    })
+}
+
+/// `--fitted` or the data directory's fitted values (missing: no fits).
+pub fn fitted_file(src: &DataSource, arg: Option<&Path>) -> anyhow::Result<(FittedFile, String)> {
+    Ok(match arg {
+        Some(p) => (FittedFile::load(p)?, p.display().to_string()),
+        None => (
+            FittedFile::load_from(src)?,
+            src.file(FITTED_FILE)?.display(),
+        ),
     })
 }
 
@@ -62,24 +70,23 @@ pub fn parse_tables(names: &[String]) -> anyhow::Result<Vec<ThesisTable>> {
 
 /// Run `validate`. Exit code 0 when every row converged, 1 otherwise.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let dir = data_dir(a.data);
-    let fitted_path = a.fitted.unwrap_or_else(|| dir.join("fitted.toml"));
-    let fitted = if a.no_fitted {
-        FittedFile::default()
+    let dir = data_dir(a.data)?;
+    let (fitted, fitted_path) = if a.no_fitted {
+        (FittedFile::default(), String::new())
     } else {
-        FittedFile::load(&fitted_path)?
+        fitted_file(&dir, a.fitted.as_deref())?
     };
     if !a.no_plots {
         std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     }
     println!("thesis tables: {}", dir.display());
     if !a.no_fitted {
-        println!("fitted values: {}", fitted_path.display());
+        println!("fitted values: {fitted_path}");
     }
     println!("coordinates: x along the clamped rod, y up, cm; errors as in the thesis: |p - q| / L_ref x 100 %");
     let mut all_ok = true;
     for t in parse_tables(&a.tables)? {
-        let data = TableData::load(&dir, t)?;
+        let data = TableData::load_from(&dir, t)?;
         let rec = fitted.get(data.spec.scene, Target::Predicted);
         let scene = match rec {
             Some(r) => r.apply(&data.scene)?,
@@ -287,8 +294,8 @@ fn print_observed_fit(c: &Comparison, rec: &FitRecord) {
 }
 
 /// Table 4.5 as an inverse experiment: estimated against hung tip masses.
-fn print_inverse(dir: &Path) -> anyhow::Result<()> {
-    let rows = cablesense::validation::table_4_5_inverse(dir)?;
+fn print_inverse(dir: &DataSource) -> anyhow::Result<()> {
+    let rows = cablesense::validation::table_4_5_inverse_from(dir)?;
     println!();
     println!("Table 4.5 as an inverse experiment: tip mass from the observed cable deflection");
     println!(
@@ -296,7 +303,7 @@ fn print_inverse(dir: &Path) -> anyhow::Result<()> {
         cablesense::validation::READING_SIGMA_M * 1e3
     );
     println!(
-        "  {:>9} {:>12} {:>12} {:>14} {:>10} {:>9}  status",
+        "  {:>9} {:>12} {:>12} {:>14} {:>10} {:>9}  status, fit (rms sigma)",
         "truth g", "observed cm", "model cm", "estimate g", "+- 1 sd g", "error %"
     );
     let mut sum = 0.0;
@@ -304,14 +311,16 @@ fn print_inverse(dir: &Path) -> anyhow::Result<()> {
         let err = (r.estimate_kg - r.truth_kg) / r.truth_kg * 100.0;
         sum += err.abs();
         println!(
-            "  {:>9.1} {:>12.2} {:>12.3} {:>14.1} {:>10.1} {:>9.1}  {:?}",
+            "  {:>9.1} {:>12.2} {:>12.3} {:>14.1} {:>10.1} {:>9.1}  {:?}, {:?} ({:.2})",
             r.truth_kg * 1e3,
             r.observed_change_m * 1e2,
             r.model_change_m * 1e2,
             r.estimate_kg * 1e3,
             r.std_kg * 1e3,
             err,
-            r.status
+            r.status,
+            r.fit,
+            r.rms_sigma
         );
     }
     if !rows.is_empty() {
