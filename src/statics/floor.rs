@@ -62,20 +62,21 @@ pub(crate) fn residual_floor(
         Integrator::Adaptive { tol, .. } => tol.powf(-0.2) * sections,
     };
     let disks = robot.guides().len() as f64;
-    // tension of cable j with its load parameter (an upper bound, as in `intensity.rs`)
-    let mut tension: Vec<f64> = (0..robot.cables().len())
-        .map(|j| loads.tension(j).abs())
-        .collect();
-    for (site, th) in params.iter().zip(theta) {
-        if let ParamSite::Tension { cable } = *site {
-            if let Some(t) = tension.get_mut(cable) {
-                *t += th.abs();
-            }
-        }
-    }
+    // tension of cable j with its load parameters (an upper bound, as in
+    // `intensity.rs`); no allocation: this runs at every solve of a control loop
+    let tension = |j: usize| -> f64 {
+        let from_params: f64 = params
+            .iter()
+            .zip(theta)
+            .filter(|(site, _)| **site == ParamSite::Tension { cable: j })
+            .map(|(_, th)| th.abs())
+            .sum();
+        loads.tension(j).abs() + from_params
+    };
     let (mut axial, mut coupling) = (0.0, 0.0);
-    for (c, t) in robot.cables().iter().zip(&tension) {
-        if *t == 0.0 {
+    for (j, c) in robot.cables().iter().enumerate() {
+        let t = tension(j);
+        if t == 0.0 {
             continue;
         }
         axial += t * length * length / ei;
