@@ -4,6 +4,7 @@
 //! name and position; numbers are validated when the scene is turned into a
 //! [`Robot`], with the field path in the error.
 
+use crate::calibrate::CalibrationSpec;
 use crate::error::ModelError;
 use crate::estimate::EstimateSpec;
 use crate::loads::Loads;
@@ -31,6 +32,10 @@ pub struct Scene {
     /// Inverse problem for `estimate` and `track` (optional).
     #[serde(default)]
     pub estimate: Option<EstimateSpec>,
+    /// Calibration from a recording for `calibrate` (optional): columns, capture
+    /// noise, capture frame, marker offset, parameters to fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationSpec>,
 }
 
 /// Why a scene could not be read.
@@ -123,6 +128,9 @@ impl Scene {
         self.loads.validate(&robot)?;
         if let Some(e) = &self.estimate {
             e.validate(&robot)?;
+        }
+        if let Some(c) = &self.calibration {
+            c.validate()?;
         }
         self.numerics.validate()
     }
