@@ -3,7 +3,7 @@
 //! (Kabsch 1976; Umeyama 1991 with scale).
 
 use crate::math::exp_so3;
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// `x_to = R x_from + t`.
@@ -42,9 +42,22 @@ impl RigidTransform {
     }
 }
 
-/// Logarithm of a rotation matrix: the rotation vector (rad), robust near pi.
+/// Logarithm of a rotation matrix: the rotation vector (rad, angle in `[0, pi]`).
+/// Through the unit quaternion (Shepperd's method): `theta = 2 atan2(|v|, w)`, exact
+/// for small angles (`2 v / w`) and well conditioned near pi.
 pub fn rotation_vector(r: &Matrix3<f64>) -> Vector3<f64> {
-    Rotation3::from_matrix_unchecked(*r).scaled_axis()
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*r));
+    let (mut w, mut v) = (q.w, q.imag());
+    if w < 0.0 {
+        w = -w;
+        v = -v;
+    }
+    let s = v.norm();
+    if s < 1e-8 {
+        // theta = 2 s + O(s^3): 2 v / w to second order
+        return v * (2.0 / w);
+    }
+    v * (2.0 * s.atan2(w) / s)
 }
 
 /// Best rigid transform (least squares) mapping `from[i]` onto `to[i]`: minimises

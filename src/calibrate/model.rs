@@ -11,7 +11,7 @@ use crate::files::Scene;
 use crate::loads::Loads;
 use crate::statics::{Pose, Start, Workspace};
 use crate::validation::{set_params, ParamPath};
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::{Matrix3, Vector3};
 
 /// A model to calibrate: given parameter values, predict each row's marker body pose.
 ///
@@ -58,7 +58,7 @@ pub struct Sensitivities {
     /// `dR/dparam = [w]x R`, index `row * params + k`.
     pub d_rotation: Vec<Vector3<f64>>,
     /// Per parameter: largest |central - forward difference| of the positions over
-    /// the largest |central difference| (a check of the finite differences; large
+    /// the largest |central| or |forward difference| (a check of the finite differences; large
     /// values mean noise or a kink). Empty for exact sensitivities.
     pub fd_disagreement: Vec<f64>,
 }
@@ -122,11 +122,10 @@ pub fn finite_differences<M: CalibrationModel + ?Sized>(
             let central = (plus[i].position - minus[i].position) / (2.0 * h);
             let forward = (plus[i].position - out.poses[i].position) / h;
             worst = worst.max((central - forward).norm());
-            size = size.max(central.norm());
+            size = size.max(central.norm()).max(forward.norm());
             out.d_position[i * n + k] = central;
             let dr = plus[i].rotation * minus[i].rotation.transpose();
-            out.d_rotation[i * n + k] =
-                Rotation3::from_matrix_unchecked(dr).scaled_axis() / (2.0 * h);
+            out.d_rotation[i * n + k] = super::frame::rotation_vector(&dr) / (2.0 * h);
         }
         out.fd_disagreement[k] = if size > 0.0 { worst / size } else { 0.0 };
     }
@@ -399,7 +398,7 @@ fn pose_at(samples: &[crate::statics::Sample], s: f64) -> Pose {
     } else {
         0.0
     };
-    let rel = Rotation3::from_matrix_unchecked(a.rotation.transpose() * b.rotation).scaled_axis();
+    let rel = super::frame::rotation_vector(&(a.rotation.transpose() * b.rotation));
     Pose {
         position: a.r + (b.r - a.r) * f,
         rotation: a.rotation * crate::math::exp_so3(&(rel * f)),
