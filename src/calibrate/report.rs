@@ -345,7 +345,7 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
     }
     let _ = writeln!(
         s,
-        r#"<text x="20" y="76" font-size="11"><tspan fill="{TRAIN}">measured (train)</tspan>  <tspan fill="{VAL}">measured (val)</tspan>  <tspan fill="{MODEL}">model</tspan>  (robot base frame, mm)</text>"#
+        r#"<text x="20" y="76" font-size="11"><tspan fill="{TRAIN}">measured (train, dots)</tspan>  <tspan fill="{VAL}">measured (val, dots)</tspan>  <tspan fill="{MODEL}">model (line)</tspan>  (robot base frame, mm; errors are model - measured distances)</text>"#
     );
     // three orthographic views
     let views = [
@@ -378,8 +378,8 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
                 .iter()
                 .map(|r| (r.model_base_m[*a] * 1e3, r.model_base_m[*b] * 1e3))
                 .collect();
-            p.polyline(&mut s, &meas, color, 0.7);
-            p.polyline(&mut s, &model, MODEL, 0.7);
+            p.dots(&mut s, &meas, color);
+            p.polyline(&mut s, &model, MODEL, 0.8);
         }
     }
     // error histogram
