@@ -2,6 +2,7 @@
 #![warn(missing_docs)]
 
 pub mod cables;
+pub mod calibrate;
 pub mod error;
 pub mod estimate;
 pub mod files;

@@ -4,6 +4,7 @@
 //! name and position; numbers are validated when the scene is turned into a
 //! [`Robot`], with the field path in the error.
 
+use crate::calibrate::CalibrationSpec;
 use crate::error::ModelError;
 use crate::estimate::EstimateSpec;
 use crate::loads::Loads;
@@ -34,6 +35,10 @@ pub struct Scene {
     /// How to read actuator readings of displacement-driven tendons (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub readings: Option<super::readings::ReadingsSpec>,
+    /// Calibration from a recording for `calibrate` (optional): columns, capture
+    /// noise, capture frame, marker offset, parameters to fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationSpec>,
 }
 
 /// Why a scene could not be read.
@@ -135,6 +140,9 @@ impl Scene {
         }
         if let Some(r) = &self.readings {
             r.validate()?;
+        }
+        if let Some(c) = &self.calibration {
+            c.validate()?;
         }
         self.numerics.validate()
     }

@@ -11,7 +11,9 @@
 //! (1e-2 m) are both of order one; the Jacobian is by central differences of
 //! relative step [`FitSettings::fd_step`] (each column costs two sweeps over the rows).
 //!
-//! Two methods: a damped Levenberg-Marquardt (default) written here, and argmin's
+//! Two methods: the damped Levenberg-Marquardt of the calibration layer (default;
+//! [`crate::calibrate::levenberg_marquardt`], the same code that calibrates a robot
+//! from a recording), and argmin's
 //! Gauss-Newton. argmin 0.11 has no Levenberg-Marquardt, its Gauss-Newton takes
 //! full steps (no safeguard when a trial point is invalid, e.g. a negative
 //! modulus, or when a row stops converging) and inverts `J^T J`, failing when a
@@ -24,6 +26,7 @@ use super::compare::compare;
 use super::param::{set_params, ParamPath};
 use super::tables::TableData;
 use super::ValidationError;
+use crate::calibrate::{Bounds, LeastSquares, LmSettings, LmStatus};
 use crate::files::Scene;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -384,79 +387,66 @@ pub fn fit(problem: &FitProblem, settings: &FitSettings) -> Result<FitReport, Va
     })
 }
 
-/// Damped Gauss-Newton (Levenberg-Marquardt) in the scaled unknowns; see
-/// Madsen, Nielsen & Tingleff, "Methods for non-linear least squares problems"
-/// (2004), algorithm 3.16, with Marquardt's `diag(J^T J)` scaling.
+/// The scaled residuals of a [`FitProblem`] as a least-squares problem of the
+/// calibration layer (central-difference Jacobian of relative step `h`).
+struct Scaled<'a> {
+    problem: &'a FitProblem,
+    h: f64,
+}
+
+impl LeastSquares for Scaled<'_> {
+    type Error = ValidationError;
+    fn unknowns(&self) -> usize {
+        self.problem.params.len()
+    }
+    fn residual_count(&self) -> usize {
+        self.problem.labels.len()
+    }
+    fn residuals(&mut self, z: &[f64], out: &mut [f64]) -> Result<(), ValidationError> {
+        out.copy_from_slice(self.problem.residuals_scaled(z)?.as_slice());
+        Ok(())
+    }
+    fn jacobian(
+        &mut self,
+        z: &[f64],
+        _r: &[f64],
+        jac: &mut DMatrix<f64>,
+    ) -> Result<(), ValidationError> {
+        *jac = self.problem.jacobian_scaled(z, self.h)?;
+        Ok(())
+    }
+}
+
+/// Damped Gauss-Newton (Levenberg-Marquardt) in the scaled unknowns: the calibration
+/// layer's [`crate::calibrate::levenberg_marquardt`] (Madsen, Nielsen & Tingleff 2004,
+/// algorithm 3.16, Marquardt's `diag(J^T J)` scaling), unbounded, least squares.
 fn levenberg_marquardt(
     problem: &FitProblem,
     z0: &[f64],
     s: &FitSettings,
 ) -> Result<(Vec<f64>, usize, FitStatus), ValidationError> {
-    let mut z = DVector::from_column_slice(z0);
-    let mut r = problem.residuals_scaled(z.as_slice())?;
-    let mut cost = 0.5 * r.norm_squared();
-    let mut j = problem.jacobian_scaled(z.as_slice(), s.fd_step)?;
-    let mut a = j.transpose() * &j;
-    let mut g = j.transpose() * &r;
-    let mut mu = 1e-3;
-    let mut nu = 2.0;
-    for it in 0..s.max_iterations {
-        if g.amax() <= 1e-15 * (1.0 + cost) {
-            return Ok((z.as_slice().to_vec(), it, FitStatus::Converged));
-        }
-        let dmax = a.diagonal().max().max(f64::MIN_POSITIVE);
-        let d = a.diagonal().map(|x| x.max(1e-12 * dmax));
-        let mut damped = a.clone();
-        for i in 0..d.len() {
-            damped[(i, i)] += mu * d[i];
-        }
-        let Some(h) = damped.cholesky().map(|c| c.solve(&(-&g))) else {
-            mu *= nu;
-            nu *= 2.0;
-            continue;
-        };
-        if h.norm() <= s.tolerance * (z.norm() + s.tolerance) {
-            return Ok((z.as_slice().to_vec(), it, FitStatus::Converged));
-        }
-        let z_new = &z + &h;
-        let trial = problem.residuals_scaled(z_new.as_slice());
-        let (gain, r_new) = match trial {
-            Ok(r_new) => {
-                let cost_new = 0.5 * r_new.norm_squared();
-                let predicted = 0.5 * h.dot(&(mu * d.component_mul(&h) - &g));
-                ((cost - cost_new) / predicted, Some((r_new, cost_new)))
-            }
-            Err(_) => (f64::NEG_INFINITY, None),
-        };
-        match r_new {
-            Some((r_new, cost_new)) if gain > 0.0 => {
-                let decrease = cost - cost_new;
-                z = z_new;
-                r = r_new;
-                cost = cost_new;
-                j = problem.jacobian_scaled(z.as_slice(), s.fd_step)?;
-                a = j.transpose() * &j;
-                g = j.transpose() * &r;
-                mu *= (1.0f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
-                nu = 2.0;
-                if decrease <= s.tolerance * cost.max(f64::MIN_POSITIVE) {
-                    return Ok((z.as_slice().to_vec(), it + 1, FitStatus::Converged));
-                }
-            }
-            _ => {
-                mu *= nu;
-                nu *= 2.0;
-                if !mu.is_finite() || nu > 1e12 {
-                    return Ok((z.as_slice().to_vec(), it + 1, FitStatus::Stalled));
-                }
-            }
-        }
-    }
-    Ok((
-        z.as_slice().to_vec(),
-        s.max_iterations,
-        FitStatus::MaxIterations,
-    ))
+    let settings = LmSettings {
+        max_iterations: s.max_iterations,
+        tolerance: s.tolerance,
+        ..LmSettings::default()
+    };
+    let mut ls = Scaled {
+        problem,
+        h: s.fd_step,
+    };
+    let res = crate::calibrate::levenberg_marquardt(
+        &mut ls,
+        z0,
+        &Bounds::none(z0.len()),
+        &settings,
+        &mut |_| {},
+    )?;
+    let status = match res.status {
+        LmStatus::Converged => FitStatus::Converged,
+        LmStatus::MaxIterations => FitStatus::MaxIterations,
+        LmStatus::Stalled => FitStatus::Stalled,
+    };
+    Ok((res.z, res.iterations, status))
 }
 
 /// argmin's Gauss-Newton on the same residuals (in mm, so its absolute cost

@@ -1,54 +1,125 @@
-//! `cablesense calibrate`: least-squares fit of named scene parameters to the
-//! observed or thesis-predicted columns of the thesis tables.
+//! `cablesense calibrate`: fit named scene parameters, in two modes.
+//!
+//! - **Recording** (`calibrate SCENE --data train.csv [--val val.csv] [--param PATH]...`):
+//!   the scene's model driven by the recording's tension columns, fitted with the
+//!   capture frame and marker offset to the measured marker positions
+//!   (`cablesense::calibrate`); writes the calibrated scene, a residual CSV and an SVG.
+//! - **Thesis tables** (`calibrate --table 4.3 --param PATH`): fit to the observed or
+//!   thesis-predicted columns of the thesis tables (`cablesense::validation::fit`, whose
+//!   Levenberg-Marquardt is `cablesense::calibrate::levenberg_marquardt`).
 
+use crate::progress;
 use crate::validate::{data_dir, fitted_file, parse_tables};
 use anyhow::Context;
+use cablesense::calibrate::{
+    calibrate, calibrated_scene, parse_row_range, write_report_svg, write_residuals_csv,
+    CalibrationReport, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup,
+    ParamSpec, Recording, RigidTransform, Stage, TensionModel,
+};
 use cablesense::files::demo::DataSource;
+use cablesense::nalgebra::Vector3;
 use cablesense::validation::{
     fit, FitMethod, FitProblem, FitSettings, ParamPath, TableData, Target, FITTED_FILE,
 };
+use cablesense::Scene;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// Arguments of `calibrate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Table(s) to fit to (4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc); repeatable. All
-    /// must use the same scene file (4.3 with 4.5; 4.4 with 4.5acc).
-    #[arg(long = "table", required = true)]
-    tables: Vec<String>,
-    /// Parameter path into the scene, e.g. `robot/sections/*/youngs_modulus_pa`
-    /// (`*` = every element gets the same value); repeatable.
-    #[arg(long = "param", required = true)]
-    params: Vec<String>,
-    /// Columns to fit: `predicted` (the thesis's model) or `observed` (the experiment).
-    #[arg(long, default_value = "predicted")]
-    target: String,
-    /// `lm` (Levenberg-Marquardt, default) or `gn` (argmin's Gauss-Newton).
-    #[arg(long, default_value = "lm")]
-    method: String,
-    /// Iteration limit.
-    #[arg(long, default_value_t = 50)]
-    max_iterations: usize,
-    /// Start from the scene file's values instead of the stored fit of this target.
-    #[arg(long)]
-    from_scene: bool,
-    /// Directory with the thesis tables, scenes and fitted.toml (default as `validate`).
+    /// Scene file (recording mode); its `[calibration]` table maps the columns.
+    scene: Option<PathBuf>,
+    /// Recording mode: the training recording (CSV or JSON lines). Thesis mode: the
+    /// directory with the thesis tables, scenes and fitted.toml (default as `validate`).
     #[arg(long)]
     data: Option<PathBuf>,
-    /// Fitted values file. Default: DATA/fitted.toml.
+    /// Recording mode: a held-out validation recording.
+    #[arg(long)]
+    val: Option<PathBuf>,
+    /// Recording mode: fit only these data rows (`A..B`, 0-based, end exclusive); the
+    /// other rows of `--data` are the validation set (when no `--val` is given).
+    #[arg(long)]
+    train_rows: Option<String>,
+    /// Parameter path into the scene, e.g. `robot/sections/*/youngs_modulus_pa`
+    /// (`*` = every element gets the same value), optionally with bounds
+    /// `PATH:MIN:MAX`; repeatable. Recording mode: added to the scene's
+    /// `[[calibration.params]]`.
+    #[arg(long = "param")]
+    params: Vec<String>,
+    /// Recording mode: marker position columns `x,y,z` (default from the scene, else
+    /// `tip_x,tip_y,tip_z`).
+    #[arg(long)]
+    marker_columns: Option<String>,
+    /// Recording mode: unit of the marker columns, `m` or `mm`.
+    #[arg(long)]
+    unit: Option<String>,
+    /// Recording mode: capture noise std per coordinate, in m.
+    #[arg(long)]
+    noise: Option<f64>,
+    /// Recording mode: Huber threshold in noise sigmas (robust loss).
+    #[arg(long)]
+    huber: Option<f64>,
+    /// Recording mode: input columns `a,b,...` (default: every tension_*, force_*, mass_*).
+    #[arg(long)]
+    inputs: Option<String>,
+    /// Recording mode: arc length (m) of the body the marker is on (default: the tip).
+    #[arg(long)]
+    marker_s: Option<f64>,
+    /// Recording mode: keep the capture frame fixed at the scene's value.
+    #[arg(long)]
+    fixed_frame: bool,
+    /// Recording mode: keep the marker offset fixed at the scene's value.
+    #[arg(long)]
+    fixed_offset: bool,
+    /// Recording mode: worker threads over row chunks.
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// Recording mode: output directory (calibrated.toml, residuals.csv, report.svg).
+    #[arg(long, default_value = "out/calibrate")]
+    out: PathBuf,
+    /// Recording mode: input column for the "error against input" plot.
+    #[arg(long)]
+    plot_input: Option<String>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Thesis mode: table(s) to fit to (4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc);
+    /// repeatable. All must use the same scene file (4.3 with 4.5; 4.4 with 4.5acc).
+    #[arg(long = "table")]
+    tables: Vec<String>,
+    /// Thesis mode: columns to fit, `predicted` (the thesis's model) or `observed`.
+    #[arg(long, default_value = "predicted")]
+    target: String,
+    /// Thesis mode: `lm` (Levenberg-Marquardt, default) or `gn` (argmin's Gauss-Newton).
+    #[arg(long, default_value = "lm")]
+    method: String,
+    /// Iteration limit (thesis mode default 50; recording mode: the scene's, default 30).
+    #[arg(long)]
+    max_iterations: Option<usize>,
+    /// Thesis mode: start from the scene file's values instead of the stored fit.
+    #[arg(long)]
+    from_scene: bool,
+    /// Thesis mode: fitted values file. Default: DATA/fitted.toml.
     #[arg(long)]
     fitted: Option<PathBuf>,
-    /// Store the fitted values in the fitted values file.
+    /// Thesis mode: store the fitted values in the fitted values file.
     #[arg(long)]
     write: bool,
-    /// Print every residual.
+    /// Thesis mode: print every residual.
     #[arg(long)]
     residuals: bool,
 }
 
 /// Run `calibrate`. Exit code 0 when the fit converged, 1 otherwise.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    if a.tables.is_empty() {
+        return run_recording(a);
+    }
+    if a.params.is_empty() {
+        anyhow::bail!("thesis mode (--table) needs at least one --param");
+    }
+    let max_iterations = a.max_iterations.unwrap_or(50);
     let dir = data_dir(a.data)?;
     // --write needs a file on disk: --fitted, or fitted.toml in a --data directory
     let fitted_path = match (&a.fitted, &dir) {
@@ -90,7 +161,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let problem = FitProblem::new(scene, data, params, target)?;
     let settings = FitSettings {
         method,
-        max_iterations: a.max_iterations,
+        max_iterations,
         ..FitSettings::default()
     };
     let started = std::time::Instant::now();
@@ -166,4 +237,233 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             ExitCode::from(1)
         },
     )
+}
+
+/// `PATH` or `PATH:MIN:MAX`.
+fn param_arg(text: &str) -> anyhow::Result<ParamSpec> {
+    let mut parts = text.split(':');
+    let mut spec = ParamSpec::new(parts.next().unwrap_or_default().trim());
+    let num = |p: Option<&str>| -> anyhow::Result<Option<f64>> {
+        match p.map(str::trim) {
+            None | Some("") => Ok(None),
+            Some(x) => {
+                Ok(Some(x.parse().with_context(|| {
+                    format!("--param {text}: `{x}` is not a number")
+                })?))
+            }
+        }
+    };
+    spec.min = num(parts.next())?;
+    spec.max = num(parts.next())?;
+    if parts.next().is_some() {
+        anyhow::bail!("--param {text}: expected PATH or PATH:MIN:MAX");
+    }
+    Ok(spec)
+}
+
+fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
+    let scene_path = a
+        .scene
+        .clone()
+        .context("recording mode needs a SCENE (or use --table for the thesis tables)")?;
+    let data = a.data.clone().context("recording mode needs --data FILE")?;
+    let scene = Scene::load(&scene_path)?;
+    let mut spec = scene.calibration.clone().unwrap_or_default();
+    if let Some(c) = &a.marker_columns {
+        let cols: Vec<String> = c.split(',').map(|x| x.trim().to_string()).collect();
+        spec.marker_columns = cols
+            .try_into()
+            .map_err(|_| anyhow::anyhow!("--marker-columns: expected three names x,y,z"))?;
+    }
+    if let Some(u) = &a.unit {
+        spec.unit = u.parse().map_err(|e: String| anyhow::anyhow!(e))?;
+    }
+    if let Some(n) = a.noise {
+        spec.capture_noise_m = n;
+    }
+    if a.huber.is_some() {
+        spec.huber_sigma = a.huber;
+    }
+    if let Some(i) = &a.inputs {
+        spec.inputs = i.split(',').map(|x| x.trim().to_string()).collect();
+    }
+    if a.marker_s.is_some() {
+        spec.marker_s_m = a.marker_s;
+    }
+    if a.fixed_frame {
+        spec.fit_capture_frame = false;
+    }
+    if a.fixed_offset {
+        spec.fit_marker_offset = false;
+    }
+    if let Some(m) = a.max_iterations {
+        spec.max_iterations = m;
+    }
+    for p in &a.params {
+        spec.params.push(param_arg(p)?);
+    }
+    spec.validate()?;
+    if spec.params.is_empty() && !spec.fit_capture_frame && !spec.fit_marker_offset {
+        anyhow::bail!(
+            "nothing to fit: no --param, no [[calibration.params]], frame and offset fixed"
+        );
+    }
+    let map = ColumnMap::from_spec(&spec);
+    let all = Recording::load(&data, &map)?;
+    let (train, val) = match (&a.val, &a.train_rows) {
+        (Some(v), None) => (all, Some(Recording::load(v, &map)?)),
+        (None, Some(r)) => {
+            let range = parse_row_range(r).map_err(|e| anyhow::anyhow!(e))?;
+            let (t, v) = all.split_rows(range);
+            (t, if v.rows.is_empty() { None } else { Some(v) })
+        }
+        (None, None) => (all, None),
+        (Some(_), Some(_)) => anyhow::bail!("give --val or --train-rows, not both"),
+    };
+    let paths: Vec<ParamPath> = spec
+        .params
+        .iter()
+        .map(|p| p.path.parse())
+        .collect::<Result<_, _>>()?;
+    let model = TensionModel::new(&scene, &paths, &train.input_names, spec.marker_s_m)?;
+    let params: Vec<FitParam> = spec
+        .params
+        .iter()
+        .zip(model.values())
+        .map(|(p, v)| FitParam::from_spec(p, *v))
+        .collect();
+    let frame = FrameSetup {
+        capture_to_base: RigidTransform::from_vector(
+            &Vector3::from(spec.capture_to_base.rotation_vector),
+            &Vector3::from(spec.capture_to_base.translation_m),
+        ),
+        marker_offset_m: Vector3::from(spec.marker_offset_m),
+        fit_capture_frame: spec.fit_capture_frame,
+        fit_marker_offset: spec.fit_marker_offset,
+    };
+    let settings = CalibrationSettings {
+        capture_noise_m: spec.capture_noise_m,
+        huber_sigma: spec.huber_sigma,
+        max_iterations: spec.max_iterations,
+        threads: a.threads.max(1),
+        ..CalibrationSettings::default()
+    };
+    let setup = CalibrationSetup {
+        model: &model,
+        params,
+        frame,
+        train: &train,
+        val: val.as_ref(),
+        robot_length_m: model.robot_length(),
+    };
+    println!(
+        "calibrating {} on {} ({} rows{}), inputs {}",
+        scene_path.display(),
+        train.file,
+        train.rows.len(),
+        val.as_ref()
+            .map(|v| format!("; validation {} rows of {}", v.rows.len(), v.file))
+            .unwrap_or_default(),
+        train.input_names.join(", ")
+    );
+    let pb = progress::bar(spec.max_iterations as u64, a.quiet);
+    let started = std::time::Instant::now();
+    let report = calibrate(&setup, &settings, &mut |p| {
+        let stage = match p.stage {
+            Stage::Frame => "frame",
+            Stage::Full => "all",
+        };
+        if p.stage == Stage::Full {
+            pb.set_position(p.lm.iteration as u64);
+        }
+        pb.set_message(format!(
+            "{stage}: cost {:.4e}, damping {:.1e}",
+            p.lm.cost, p.lm.damping
+        ));
+    });
+    pb.finish_and_clear();
+    let report = report?;
+    print_report(&report, started.elapsed().as_secs_f64());
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let out_scene = calibrated_scene(&scene, &spec, &report, &paths)?;
+    let toml_path = a.out.join("calibrated.toml");
+    std::fs::write(&toml_path, out_scene.to_toml_string())
+        .with_context(|| format!("writing {}", toml_path.display()))?;
+    let csv_path = a.out.join("residuals.csv");
+    write_residuals_csv(&csv_path, &report)?;
+    let svg_path = a.out.join("report.svg");
+    let opts = cablesense::calibrate::SvgOptions {
+        title: format!("calibration of {} on {}", scene_path.display(), train.file),
+        input: a.plot_input.clone(),
+    };
+    write_report_svg(&svg_path, &report, &opts)?;
+    println!(
+        "wrote {}, {}, {}",
+        toml_path.display(),
+        csv_path.display(),
+        svg_path.display()
+    );
+    Ok(
+        if report.status == cablesense::calibrate::LmStatus::Converged {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::from(1)
+        },
+    )
+}
+
+fn print_report(r: &CalibrationReport, secs: f64) {
+    println!(
+        "status {:?} after {} iterations, {:.2} s; train residual {:.2} capture-noise sigmas RMS \
+         (variance factor {:.3})",
+        r.status, r.iterations, secs, r.rms_sigma, r.statistics.residual_variance
+    );
+    println!(
+        "{:<44} {:>14} {:>14} {:>11}",
+        "parameter", "start", "fitted", "std. error"
+    );
+    for p in &r.params {
+        println!(
+            "{:<44} {:>14.6e} {:>14.6e} {:>11.3e}{}",
+            p.name,
+            p.initial,
+            p.value,
+            p.std_error,
+            if p.at_bound { "  (at bound)" } else { "" }
+        );
+    }
+    let n = r.params.len();
+    if n > 1 && n <= 16 {
+        println!("correlation:");
+        for i in 0..n {
+            let row: Vec<String> = (0..n)
+                .map(|j| format!("{:>6.2}", r.statistics.correlation[i * n + j]))
+                .collect();
+            println!("  {:>2} {}", i, row.join(" "));
+        }
+    }
+    let len_mm = r.robot_length_m * 1e3;
+    let show = |name: &str, e: &cablesense::calibrate::TipErrors| {
+        for (label, s) in [
+            ("raw", &e.raw),
+            ("mean offset removed (upstream convention)", &e.mean_removed),
+        ] {
+            println!(
+                "{name} tip error, {label}: RMSE {:.3} mm ({:.2} % of L), median {:.3} mm, p95 {:.3} mm, max {:.3} mm ({} rows)",
+                s.rmse_m * 1e3,
+                s.rmse_m * 1e3 / len_mm * 100.0,
+                s.median_m * 1e3,
+                s.p95_m * 1e3,
+                s.max_m * 1e3,
+                s.count
+            );
+        }
+    };
+    show("train", &r.train);
+    if let Some(v) = &r.val {
+        show("val", v);
+    }
+    for w in &r.warnings {
+        println!("warning: {w}");
+    }
 }

@@ -35,7 +35,7 @@ enum Command {
     /// Compare the model with the thesis tables shipped in data/thesis.
     Validate(validate::Args),
     /// Fit named scene parameters to observed or predicted table columns.
-    Calibrate(calibrate::Args),
+    Calibrate(Box<calibrate::Args>),
     /// Estimate loads and shape from a file of cable length changes.
     Estimate(estimate::Args),
     /// Streaming estimation: encoder rows in (stdin or --input), JSON lines out.
@@ -53,7 +53,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Solve(a) => solve::run(a),
         Command::Validate(a) => validate::run(a),
-        Command::Calibrate(a) => calibrate::run(a),
+        Command::Calibrate(a) => calibrate::run(*a),
         Command::Estimate(a) => estimate::run(a),
         Command::Track(a) => track::run(a),
         Command::Pareto(a) => pareto::run(a),

@@ -1,0 +1,418 @@
+//! Levenberg-Marquardt for bounded, optionally robust, nonlinear least squares.
+//!
+//! Minimises `sum_g rho(|r_g(z)|)` over a box `lower <= z <= upper`, where the
+//! residuals are taken in groups `r_g` (e.g. the 3 coordinates of one marker point),
+//! `rho(a) = a^2 / 2` (least squares) or Huber's
+//! `rho(a) = a^2/2 (a <= k), k a - k^2/2 (a > k)` on the first `rows` residuals.
+//! The step solves the damped normal equations
+//! `(J^T W J + mu diag(J^T W J)) h = -J^T W r` (Marquardt's scaling; Madsen, Nielsen &
+//! Tingleff 2004, algorithm 3.16 with Nielsen's damping update), with `W` the IRLS
+//! weights `rho'(a)/a` at the current point. Bounds: variables at a bound whose
+//! gradient pushes outwards are held, the others stepped, and the trial point is
+//! projected onto the box (a projected LM; the gain ratio uses the projected step).
+//!
+//! The problem supplies residuals and, optionally, its own Jacobian; the default is
+//! central differences ([`central_differences`]).
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// A residual function `r(z)` of `n` unknowns.
+pub trait LeastSquares {
+    /// Error of an evaluation (a trial point that fails is rejected by the LM).
+    type Error;
+    /// Number of unknowns.
+    fn unknowns(&self) -> usize;
+    /// Number of residuals.
+    fn residual_count(&self) -> usize;
+    /// Residuals at `z` into `out` (length [`LeastSquares::residual_count`]).
+    fn residuals(&mut self, z: &[f64], out: &mut [f64]) -> Result<(), Self::Error>;
+    /// Jacobian `dr/dz` at `z` (with `r = r(z)` already evaluated) into `jac`
+    /// (`residual_count x unknowns`). Default: central differences of step
+    /// [`LeastSquares::fd_step`] `* max(|z_k|, 1)`.
+    fn jacobian(
+        &mut self,
+        z: &[f64],
+        r: &[f64],
+        jac: &mut DMatrix<f64>,
+    ) -> Result<(), Self::Error> {
+        let _ = r;
+        let h = self.fd_step();
+        central_differences(self, z, h, jac)
+    }
+    /// Relative finite-difference step of the default Jacobian (default 1e-6).
+    fn fd_step(&self) -> f64 {
+        1e-6
+    }
+}
+
+/// Central-difference Jacobian of `p` at `z`, step `h max(|z_k|, 1)` per column.
+pub fn central_differences<P: LeastSquares + ?Sized>(
+    p: &mut P,
+    z: &[f64],
+    h: f64,
+    jac: &mut DMatrix<f64>,
+) -> Result<(), P::Error> {
+    let m = p.residual_count();
+    let mut zp = z.to_vec();
+    let mut rp = vec![0.0; m];
+    let mut rm = vec![0.0; m];
+    for k in 0..z.len() {
+        let hk = h * z[k].abs().max(1.0);
+        zp[k] = z[k] + hk;
+        p.residuals(&zp, &mut rp)?;
+        zp[k] = z[k] - hk;
+        p.residuals(&zp, &mut rm)?;
+        zp[k] = z[k];
+        for i in 0..m {
+            jac[(i, k)] = (rp[i] - rm[i]) / (2.0 * hk);
+        }
+    }
+    Ok(())
+}
+
+/// Huber loss on the first `rows` residuals, in groups of `group`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Huber {
+    /// Threshold `k` on a group's norm (same unit as the residuals).
+    pub threshold: f64,
+    /// Residuals per group (3 for a point).
+    pub group: usize,
+    /// Residuals subject to the loss (the rest, e.g. priors, stay quadratic).
+    pub rows: usize,
+}
+
+impl Huber {
+    /// IRLS weight of a group of norm `a`: `rho'(a) / a`.
+    pub fn weight(&self, a: f64) -> f64 {
+        if a <= self.threshold {
+            1.0
+        } else {
+            self.threshold / a
+        }
+    }
+    /// `rho(a)`.
+    pub fn rho(&self, a: f64) -> f64 {
+        if a <= self.threshold {
+            0.5 * a * a
+        } else {
+            self.threshold * a - 0.5 * self.threshold * self.threshold
+        }
+    }
+}
+
+/// Settings of [`levenberg_marquardt`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LmSettings {
+    /// Jacobian evaluations (accepted steps) allowed (default 50).
+    pub max_iterations: usize,
+    /// Stop when an accepted step lowers the cost by less than this fraction, or the
+    /// step is shorter than this times `|z|` (default 1e-10).
+    pub tolerance: f64,
+    /// Initial damping `mu` relative to `diag(J^T W J)` (default 1e-3).
+    pub initial_damping: f64,
+    /// Robust loss; `None` (default) = least squares.
+    pub huber: Option<Huber>,
+}
+
+impl Default for LmSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 50,
+            tolerance: 1e-10,
+            initial_damping: 1e-3,
+            huber: None,
+        }
+    }
+}
+
+/// How [`levenberg_marquardt`] ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LmStatus {
+    /// Cost decrease, step or projected gradient below the tolerance: a (local)
+    /// minimum. Usable.
+    Converged,
+    /// Iteration limit: the best point so far. Usable if its residuals are.
+    MaxIterations,
+    /// No damping produced a decrease (flat or invalid neighbourhood): the best point
+    /// so far.
+    Stalled,
+}
+
+/// One step of the iteration, for progress display.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LmIteration {
+    /// Accepted steps so far.
+    pub iteration: usize,
+    /// Cost `sum rho` at the current point.
+    pub cost: f64,
+    /// Damping `mu`.
+    pub damping: f64,
+    /// Whether the last trial was accepted.
+    pub accepted: bool,
+}
+
+/// Result of [`levenberg_marquardt`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct LmResult {
+    /// Final unknowns.
+    pub z: Vec<f64>,
+    /// How it ended.
+    pub status: LmStatus,
+    /// Accepted steps.
+    pub iterations: usize,
+    /// Residual evaluations (Jacobians by differences not included).
+    pub evaluations: usize,
+    /// Final cost `sum rho`.
+    pub cost: f64,
+    /// Residuals at `z`.
+    pub residuals: Vec<f64>,
+    /// IRLS weights per residual at `z` (all 1 without a robust loss).
+    pub weights: Vec<f64>,
+    /// Jacobian at `z` (`residuals x unknowns`).
+    pub jacobian: DMatrix<f64>,
+}
+
+/// Box bounds on the unknowns (`-inf`/`+inf` for none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bounds {
+    /// Lower bounds.
+    pub lower: Vec<f64>,
+    /// Upper bounds.
+    pub upper: Vec<f64>,
+}
+
+impl Bounds {
+    /// No bounds on `n` unknowns.
+    pub fn none(n: usize) -> Self {
+        Self {
+            lower: vec![f64::NEG_INFINITY; n],
+            upper: vec![f64::INFINITY; n],
+        }
+    }
+    fn project(&self, z: &mut DVector<f64>) {
+        for k in 0..z.len() {
+            z[k] = z[k].clamp(self.lower[k], self.upper[k]);
+        }
+    }
+}
+
+fn weights_and_cost(r: &[f64], huber: Option<&Huber>, w: &mut [f64]) -> f64 {
+    w.iter_mut().for_each(|x| *x = 1.0);
+    let Some(h) = huber else {
+        return 0.5 * r.iter().map(|x| x * x).sum::<f64>();
+    };
+    let g = h.group.max(1);
+    let rows = h.rows.min(r.len());
+    let mut cost = 0.0;
+    let mut i = 0;
+    while i < rows {
+        let e = (i + g).min(rows);
+        let a = r[i..e].iter().map(|x| x * x).sum::<f64>().sqrt();
+        cost += h.rho(a);
+        let wt = h.weight(a);
+        w[i..e].iter_mut().for_each(|x| *x = wt);
+        i = e;
+    }
+    cost + 0.5 * r[rows..].iter().map(|x| x * x).sum::<f64>()
+}
+
+/// Minimise the problem's cost from `z0` within `bounds` (see the module docs).
+/// `observer` sees every trial. The starting point must evaluate; later failures
+/// are rejected trials.
+pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
+    p: &mut P,
+    z0: &[f64],
+    bounds: &Bounds,
+    s: &LmSettings,
+    observer: &mut dyn FnMut(&LmIteration),
+) -> Result<LmResult, P::Error> {
+    let (n, m) = (p.unknowns(), p.residual_count());
+    let mut z = DVector::from_column_slice(z0);
+    bounds.project(&mut z);
+    let mut r = vec![0.0; m];
+    p.residuals(z.as_slice(), &mut r)?;
+    let mut evaluations = 1;
+    let mut w = vec![1.0; m];
+    let mut cost = weights_and_cost(&r, s.huber.as_ref(), &mut w);
+    let mut jac = DMatrix::zeros(m, n);
+    p.jacobian(z.as_slice(), &r, &mut jac)?;
+    let normal = |jac: &DMatrix<f64>, r: &[f64], w: &[f64]| {
+        let mut jw = jac.clone();
+        for (i, wi) in w.iter().enumerate() {
+            jw.row_mut(i).scale_mut(*wi);
+        }
+        let a = jac.transpose() * &jw;
+        let g = jw.transpose() * DVector::from_column_slice(r);
+        (a, g)
+    };
+    let (mut a, mut g) = normal(&jac, &r, &w);
+    let mut mu = s.initial_damping;
+    let mut nu = 2.0;
+    let mut iterations = 0;
+    let mut r_new = vec![0.0; m];
+    let mut w_new = vec![1.0; m];
+    let mut jac_new = DMatrix::zeros(m, n);
+    let finish = |z: DVector<f64>, status, iterations, evaluations, cost, r, w, jac| LmResult {
+        z: z.as_slice().to_vec(),
+        status,
+        iterations,
+        evaluations,
+        cost,
+        residuals: r,
+        weights: w,
+        jacobian: jac,
+    };
+    loop {
+        if iterations >= s.max_iterations {
+            return Ok(finish(
+                z,
+                LmStatus::MaxIterations,
+                iterations,
+                evaluations,
+                cost,
+                r,
+                w,
+                jac,
+            ));
+        }
+        // free set: not held at a bound by an outward gradient
+        let free: Vec<usize> = (0..n)
+            .filter(|&k| {
+                !((z[k] <= bounds.lower[k] && g[k] > 0.0)
+                    || (z[k] >= bounds.upper[k] && g[k] < 0.0))
+            })
+            .collect();
+        let gmax = free.iter().fold(0.0f64, |acc, &k| acc.max(g[k].abs()));
+        if free.is_empty() || gmax <= 1e-15 * (1.0 + cost) {
+            return Ok(finish(
+                z,
+                LmStatus::Converged,
+                iterations,
+                evaluations,
+                cost,
+                r,
+                w,
+                jac,
+            ));
+        }
+        let nf = free.len();
+        let dmax = a.diagonal().max().max(f64::MIN_POSITIVE);
+        let mut damped = DMatrix::zeros(nf, nf);
+        let mut rhs = DVector::zeros(nf);
+        for (i, &ki) in free.iter().enumerate() {
+            for (j, &kj) in free.iter().enumerate() {
+                damped[(i, j)] = a[(ki, kj)];
+            }
+            damped[(i, i)] += mu * a[(ki, ki)].max(1e-12 * dmax);
+            rhs[i] = -g[ki];
+        }
+        let Some(hf) = damped.cholesky().map(|c| c.solve(&rhs)) else {
+            mu *= nu;
+            nu *= 2.0;
+            if !mu.is_finite() || nu > 1e15 {
+                return Ok(finish(
+                    z,
+                    LmStatus::Stalled,
+                    iterations,
+                    evaluations,
+                    cost,
+                    r,
+                    w,
+                    jac,
+                ));
+            }
+            continue;
+        };
+        let mut z_new = z.clone();
+        for (i, &k) in free.iter().enumerate() {
+            z_new[k] += hf[i];
+        }
+        bounds.project(&mut z_new);
+        let h = &z_new - &z;
+        if h.norm() <= s.tolerance * (z.norm() + s.tolerance) {
+            return Ok(finish(
+                z,
+                LmStatus::Converged,
+                iterations,
+                evaluations,
+                cost,
+                r,
+                w,
+                jac,
+            ));
+        }
+        // predicted decrease of the local quadratic model (undamped, projected step)
+        let predicted = -(g.dot(&h) + 0.5 * h.dot(&(&a * &h)));
+        let trial = p.residuals(z_new.as_slice(), &mut r_new);
+        evaluations += 1;
+        let accepted = match trial {
+            Ok(()) if r_new.iter().all(|x| x.is_finite()) => {
+                let cost_new = weights_and_cost(&r_new, s.huber.as_ref(), &mut w_new);
+                let gain = (cost - cost_new) / predicted.max(f64::MIN_POSITIVE);
+                // a point whose Jacobian cannot be evaluated (e.g. a perturbed model
+                // solve fails) is rejected like a failed trial
+                if gain > 0.0
+                    && cost_new < cost
+                    && p.jacobian(z_new.as_slice(), &r_new, &mut jac_new).is_ok()
+                {
+                    let decrease = cost - cost_new;
+                    z = z_new;
+                    std::mem::swap(&mut r, &mut r_new);
+                    std::mem::swap(&mut w, &mut w_new);
+                    std::mem::swap(&mut jac, &mut jac_new);
+                    cost = cost_new;
+                    (a, g) = normal(&jac, &r, &w);
+                    mu *= (1.0f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
+                    nu = 2.0;
+                    iterations += 1;
+                    observer(&LmIteration {
+                        iteration: iterations,
+                        cost,
+                        damping: mu,
+                        accepted: true,
+                    });
+                    if decrease <= s.tolerance * cost.max(f64::MIN_POSITIVE) {
+                        return Ok(finish(
+                            z,
+                            LmStatus::Converged,
+                            iterations,
+                            evaluations,
+                            cost,
+                            r,
+                            w,
+                            jac,
+                        ));
+                    }
+                    true
+                } else {
+                    false
+                }
+            }
+            _ => false,
+        };
+        if !accepted {
+            mu *= nu;
+            nu *= 2.0;
+            observer(&LmIteration {
+                iteration: iterations,
+                cost,
+                damping: mu,
+                accepted: false,
+            });
+            if !mu.is_finite() || nu > 1e15 {
+                return Ok(finish(
+                    z,
+                    LmStatus::Stalled,
+                    iterations,
+                    evaluations,
+                    cost,
+                    r,
+                    w,
+                    jac,
+                ));
+            }
+        }
+    }
+}

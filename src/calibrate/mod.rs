@@ -1,0 +1,138 @@
+//! Calibration of a robot model from a recording: scene parameters (by path,
+//! [`crate::validation::ParamPath`]) together with the capture-frame transform and
+//! the marker offset, fitted to measured marker positions.
+//!
+//! Workflow:
+//! 1. A scene with a `[calibration]` table ([`CalibrationSpec`]: columns, unit,
+//!    capture noise, parameters with bounds and priors).
+//! 2. [`Recording::load`] reads the train (and validation) rows (CSV or JSON lines).
+//! 3. A [`CalibrationModel`] predicts each row's marker body pose: [`TensionModel`]
+//!    for the forward model driven by `tension_<cable>` columns; other models (e.g.
+//!    displacement-driven tendons) implement the same trait.
+//! 4. [`calibrate`]: closed-form capture frame ([`kabsch`]), then bounded, optionally
+//!    robust Levenberg-Marquardt ([`levenberg_marquardt`]) over all rows, with
+//!    finite-difference sensitivities checked against forward differences unless the
+//!    model supplies its own ([`CalibrationModel::sensitivities`]).
+//! 5. [`CalibrationReport`]: fitted values with standard errors, correlation,
+//!    unidentifiable directions ([`Unidentifiable`]), train/val tip errors raw and with
+//!    the mean offset removed ([`TipErrors`]); [`write_report_svg`],
+//!    [`write_residuals_csv`] and [`calibrated_scene`] write it out.
+//!
+//! Units: SI (m, N, kg, rad); a recording's mm columns are converted on reading.
+
+mod fit;
+mod frame;
+mod lm;
+mod model;
+mod recording;
+mod report;
+mod spec;
+mod stats;
+
+pub use fit::{
+    calibrate, frame_param_names, CalibrationReport, CalibrationSettings, CalibrationSetup,
+    FitParam, FittedParam, FrameSetup, Progress, RowResult, Split, Stage,
+};
+pub use frame::{kabsch, rotation_vector, umeyama, RigidTransform};
+pub use lm::{
+    central_differences, levenberg_marquardt, Bounds, Huber, LeastSquares, LmIteration, LmResult,
+    LmSettings, LmStatus,
+};
+pub use model::{finite_differences, CalibrationModel, Sensitivities, TensionModel};
+pub use recording::{is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow};
+pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
+pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec};
+pub use stats::{
+    parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,
+    CORRELATION_LIMIT, NULL_DIRECTION_LIMIT,
+};
+
+use crate::error::ModelError;
+use crate::statics::SolveStatus;
+use crate::validation::ValidationError;
+use thiserror::Error;
+
+/// Why a calibration could not run. Non-convergence of the fit itself is a status
+/// ([`LmStatus`]); a row the model cannot solve at the starting point is an error.
+#[derive(Debug, Error)]
+pub enum CalibrationError {
+    /// A cell of a recording is bad (non-numeric, NaN, empty, missing).
+    #[error("{file}:{line}: column `{column}`: {why}")]
+    Recording {
+        /// File.
+        file: String,
+        /// Line (1-based).
+        line: usize,
+        /// Column name.
+        column: String,
+        /// What is wrong.
+        why: String,
+    },
+    /// A column the mapping needs is not in the header.
+    #[error("{file}:{line}: no column `{column}` in the header (columns: {available})")]
+    MissingColumn {
+        /// File.
+        file: String,
+        /// Header line.
+        line: usize,
+        /// Missing column.
+        column: String,
+        /// Columns present.
+        available: String,
+    },
+    /// The measured marker path is about 1000x larger (or smaller) than the model's and
+    /// the residual is far above the capture noise: the columns' unit is wrong.
+    #[error(
+        "{file}:{line}: columns `{columns}` read as {unit}: the measured path spreads {spread_ratio:.3e} times the model's \
+         and the best rigid fit leaves {rms_sigma:.3e} capture-noise sigmas ({noise_m} m) RMS; \
+         the unit is wrong (mm read as m?) (line: the worst row)"
+    )]
+    UnitMismatch {
+        /// File.
+        file: String,
+        /// Line of the worst row.
+        line: usize,
+        /// Marker columns.
+        columns: String,
+        /// Unit they were read in.
+        unit: String,
+        /// Spread of the measured points over the model's.
+        spread_ratio: f64,
+        /// RMS residual per coordinate in noise sigmas.
+        rms_sigma: f64,
+        /// Stated capture noise (m).
+        noise_m: f64,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {why}")]
+    Io {
+        /// Path.
+        path: String,
+        /// Cause.
+        why: String,
+    },
+    /// A parameter path or scene problem.
+    #[error(transparent)]
+    Validation(#[from] ValidationError),
+    /// The scene is invalid with some parameter values or loads.
+    #[error("{context}: {source}")]
+    Model {
+        /// What was being built.
+        context: String,
+        /// The invalid field.
+        source: ModelError,
+    },
+    /// The model could not predict a row.
+    #[error("line {line}: forward solve ended with {status:?} (residual {residual:.2e})")]
+    NotConverged {
+        /// Line of the row.
+        line: usize,
+        /// Solver status.
+        status: SolveStatus,
+        /// Scaled residual.
+        residual: f64,
+    },
+    /// Inconsistent calibration input (parameters, columns, settings).
+    #[error("calibration: {0}")]
+    BadInput(String),
+}
