@@ -1,0 +1,539 @@
+//! C ABI of `cablesense` for control loops (header: `capi/include/cablesense.h`).
+//!
+//! Two opaque handles, each created from a scene TOML string:
+//! * [`CsModel`]: the forward statics of the scene (its loads, its `[numerics]`):
+//!   solve, then read the tip pose, section end poses and cable lengths;
+//! * [`CsEstimator`]: the scene's `[estimate]` problem: one tick per sample of
+//!   cable length changes, then read the estimate, its covariance, the tip position
+//!   and the predicted cable lengths.
+//!
+//! Every entry point returns a [`CsCode`] (0 = OK) and catches panics
+//! (`catch_unwind`), so no unwind crosses the boundary; the message of the last
+//! failure on the calling thread is [`cs_last_error`]. Numerical outcomes (a solve
+//! that did not converge, a stalled estimate) are not failures: they come back as
+//! status codes in the info structs. After the first tick, [`cs_estimator_tick`],
+//! [`cs_estimator_values`], [`cs_estimator_tip_position`] and
+//! [`cs_estimator_cable_lengths`] do not allocate (LM and Gauss-Newton methods;
+//! `capi/tests/alloc.rs` counts); [`cs_model_section_poses`] and
+//! [`cs_model_tip_pose`] recompute the shape and allocate.
+
+use cablesense::estimate::{EstimateStatus, Estimator};
+use cablesense::{Scene, SolveStatus, Start, Workspace};
+use std::cell::RefCell;
+use std::ffi::{c_char, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// Result code of every call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CsCode {
+    /// Success.
+    Ok = 0,
+    /// A null pointer, or a buffer of the wrong length.
+    BadArgument = 1,
+    /// The scene text is not UTF-8, does not parse or is invalid; or it has no
+    /// `[estimate]` table for an estimator.
+    BadScene = 2,
+    /// A panic inside the library was caught (a bug: please report the message).
+    Panic = 3,
+}
+
+/// Forward solve outcome (`SolveStatus`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CsSolveInfo {
+    /// 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
+    /// 5 unstable. Only 0 is a usable shape.
+    pub status: i32,
+    /// Newton iterations.
+    pub iterations: u32,
+    /// Scaled boundary residual (-).
+    pub residual: f64,
+}
+
+/// Estimator tick outcome.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CsEstimateInfo {
+    /// 0 converged, 1 unobservable, 2 max_iterations, 3 time_budget, 4 stalled,
+    /// 5 forward_failed, 6 no_data (see `EstimateStatus`).
+    pub status: i32,
+    /// 1 when the RMS residual exceeds the scene's `poor_fit_rms_sigma`.
+    pub poor_fit: i32,
+    /// RMS over the measured cables of `residual / sigma` (-).
+    pub rms_sigma: f64,
+}
+
+/// Forward model handle.
+pub struct CsModel {
+    ws: Workspace,
+}
+
+/// Estimator handle; buffers sized once.
+pub struct CsEstimator {
+    est: Estimator,
+    lengths: Vec<f64>,
+    changes: Vec<f64>,
+    sigma: Vec<f64>,
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn set_error(msg: &str) {
+    let c = CString::new(msg.replace('\0', " ")).unwrap_or_default();
+    LAST_ERROR.with(|e| *e.borrow_mut() = c);
+}
+
+/// Run `f`, turning `Err` and panics into a code and the last error message.
+fn guard(f: impl FnOnce() -> Result<(), (CsCode, String)>) -> CsCode {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(())) => CsCode::Ok,
+        Ok(Err((code, msg))) => {
+            set_error(&msg);
+            code
+        }
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            set_error(&format!("panic in cablesense: {msg}"));
+            CsCode::Panic
+        }
+    }
+}
+
+fn bad(msg: impl Into<String>) -> (CsCode, String) {
+    (CsCode::BadArgument, msg.into())
+}
+
+fn scene_from(text: *const c_char) -> Result<Scene, (CsCode, String)> {
+    if text.is_null() {
+        return Err(bad("scene text is null"));
+    }
+    // SAFETY: the caller passes a NUL-terminated string (header contract).
+    let s = unsafe { CStr::from_ptr(text) }
+        .to_str()
+        .map_err(|e| (CsCode::BadScene, format!("scene text is not UTF-8: {e}")))?;
+    Scene::parse_validated(s, std::path::Path::new("<scene>"), false)
+        .map_err(|e| (CsCode::BadScene, e.to_string()))
+}
+
+/// `&mut [f64]` of `len` from a caller buffer (null only when `len == 0`).
+///
+/// # Safety
+/// `ptr` must point to `len` writable doubles.
+unsafe fn out_slice<'a>(ptr: *mut f64, len: usize) -> Result<&'a mut [f64], (CsCode, String)> {
+    if len == 0 {
+        return Ok(&mut []);
+    }
+    if ptr.is_null() {
+        return Err(bad("output buffer is null"));
+    }
+    // SAFETY: checked non-null; length per the caller's contract.
+    Ok(unsafe { std::slice::from_raw_parts_mut(ptr, len) })
+}
+
+fn solve_code(s: SolveStatus) -> i32 {
+    match s {
+        SolveStatus::Converged => 0,
+        SolveStatus::MaxIterations => 1,
+        SolveStatus::Stalled => 2,
+        SolveStatus::IllConditioned => 3,
+        SolveStatus::NonFinite => 4,
+        SolveStatus::Unstable => 5,
+    }
+}
+
+fn estimate_code(s: EstimateStatus) -> i32 {
+    match s {
+        EstimateStatus::Converged => 0,
+        EstimateStatus::Unobservable => 1,
+        EstimateStatus::MaxIterations => 2,
+        EstimateStatus::TimeBudget => 3,
+        EstimateStatus::Stalled => 4,
+        EstimateStatus::ForwardFailed => 5,
+        EstimateStatus::NoData => 6,
+    }
+}
+
+/// Message of the last failed call on this thread (empty if none). Valid until the
+/// next failing call on the same thread; never null.
+#[no_mangle]
+pub extern "C" fn cs_last_error() -> *const c_char {
+    LAST_ERROR.with(|e| e.borrow().as_ptr())
+}
+
+/// Create a forward model from scene TOML text. On success `*out` owns the handle
+/// (free it with [`cs_model_free`]).
+///
+/// # Safety
+/// `scene_toml` is a NUL-terminated string; `out` points to a writable pointer.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_new(scene_toml: *const c_char, out: *mut *mut CsModel) -> CsCode {
+    guard(|| {
+        if out.is_null() {
+            return Err(bad("out is null"));
+        }
+        let scene = scene_from(scene_toml)?;
+        let robot = scene
+            .build_robot()
+            .map_err(|e| (CsCode::BadScene, e.to_string()))?;
+        let ws = Workspace::new(robot, scene.loads, scene.numerics)
+            .map_err(|e| (CsCode::BadScene, e.to_string()))?;
+        // SAFETY: checked non-null.
+        unsafe { *out = Box::into_raw(Box::new(CsModel { ws })) };
+        Ok(())
+    })
+}
+
+/// Free a model (null is ignored).
+///
+/// # Safety
+/// `m` comes from [`cs_model_new`] and is not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_free(m: *mut CsModel) {
+    if !m.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: owned handle from cs_model_new.
+            drop(unsafe { Box::from_raw(m) })
+        }));
+    }
+}
+
+/// Number of sections, or 0 for a null handle.
+///
+/// # Safety
+/// `m` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_section_count(m: *const CsModel) -> usize {
+    // SAFETY: live handle or null.
+    unsafe { m.as_ref() }.map_or(0, |m| m.ws.robot().sections().len())
+}
+
+/// Number of cables, or 0 for a null handle.
+///
+/// # Safety
+/// `m` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_cable_count(m: *const CsModel) -> usize {
+    // SAFETY: live handle or null.
+    unsafe { m.as_ref() }.map_or(0, |m| m.ws.robot().cables().len())
+}
+
+/// Solve the statics with the scene's loads: `warm != 0` starts from the previous
+/// solution. The outcome is in `*info` (may be null).
+///
+/// # Safety
+/// `m` is a live handle; `info` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_solve(
+    m: *mut CsModel,
+    warm: i32,
+    info: *mut CsSolveInfo,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let m = unsafe { m.as_mut() }.ok_or_else(|| bad("model is null"))?;
+        let r =
+            m.ws.solve(if warm != 0 { Start::Warm } else { Start::Cold });
+        // SAFETY: null or writable.
+        if let Some(info) = unsafe { info.as_mut() } {
+            *info = CsSolveInfo {
+                status: solve_code(r.status),
+                iterations: r.iterations as u32,
+                residual: r.residual,
+            };
+        }
+        Ok(())
+    })
+}
+
+/// Tip position `[3]` (m) and rotation `[9]` (column-major) of the last solve.
+/// Allocates (recomputes the shape).
+///
+/// # Safety
+/// `m` is a live handle; `position` has 3 and `rotation` 9 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_tip_pose(
+    m: *mut CsModel,
+    position: *mut f64,
+    rotation: *mut f64,
+) -> CsCode {
+    guard(|| {
+        let n = unsafe { cs_model_section_count(m) };
+        if n == 0 {
+            return Err(bad("model is null"));
+        }
+        // SAFETY: live handle (n > 0).
+        let m = unsafe { &mut *m };
+        let tip = *m.ws.solution().tip();
+        // SAFETY: buffer sizes per the contract.
+        let (p, r) = unsafe { (out_slice(position, 3)?, out_slice(rotation, 9)?) };
+        p.copy_from_slice(tip.position.as_slice());
+        r.copy_from_slice(tip.rotation.as_slice());
+        Ok(())
+    })
+}
+
+/// Section end poses of the last solve: `positions[3 n]` (m), `rotations[9 n]`
+/// (column-major each), `n` = [`cs_model_section_count`]. Allocates.
+///
+/// # Safety
+/// `m` is a live handle; the buffers hold `3 n` and `9 n` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_section_poses(
+    m: *mut CsModel,
+    positions: *mut f64,
+    rotations: *mut f64,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let m = unsafe { m.as_mut() }.ok_or_else(|| bad("model is null"))?;
+        let k = m.ws.robot().sections().len();
+        if n != k {
+            return Err(bad(format!("n = {n}, the robot has {k} sections")));
+        }
+        let sol = m.ws.solution();
+        // SAFETY: buffer sizes per the contract.
+        let (p, r) = unsafe { (out_slice(positions, 3 * n)?, out_slice(rotations, 9 * n)?) };
+        for (i, t) in sol.section_tips.iter().enumerate() {
+            p[3 * i..3 * i + 3].copy_from_slice(t.position.as_slice());
+            r[9 * i..9 * i + 9].copy_from_slice(t.rotation.as_slice());
+        }
+        Ok(())
+    })
+}
+
+/// Cable lengths of the last solve (m), `n` = [`cs_model_cable_count`]. No allocation.
+///
+/// # Safety
+/// `m` is a live handle; `out` holds `n` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_cable_lengths(
+    m: *const CsModel,
+    out: *mut f64,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let m = unsafe { m.as_ref() }.ok_or_else(|| bad("model is null"))?;
+        let c = m.ws.robot().cables().len();
+        if n != c {
+            return Err(bad(format!("n = {n}, the robot has {c} cables")));
+        }
+        // SAFETY: buffer size per the contract.
+        m.ws.cable_lengths_into(unsafe { out_slice(out, n)? });
+        Ok(())
+    })
+}
+
+/// Create an estimator from scene TOML text with an `[estimate]` table.
+///
+/// # Safety
+/// `scene_toml` is a NUL-terminated string; `out` points to a writable pointer.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_new(
+    scene_toml: *const c_char,
+    out: *mut *mut CsEstimator,
+) -> CsCode {
+    guard(|| {
+        if out.is_null() {
+            return Err(bad("out is null"));
+        }
+        let scene = scene_from(scene_toml)?;
+        let spec = scene
+            .estimate
+            .clone()
+            .ok_or_else(|| (CsCode::BadScene, "the scene has no [estimate] table".into()))?;
+        let robot = scene
+            .build_robot()
+            .map_err(|e| (CsCode::BadScene, e.to_string()))?;
+        let c = robot.cables().len();
+        let est = Estimator::new(robot, scene.loads, scene.numerics, spec)
+            .map_err(|e| (CsCode::BadScene, e.to_string()))?;
+        let h = CsEstimator {
+            est,
+            lengths: vec![0.0; c],
+            changes: vec![0.0; c],
+            sigma: vec![0.0; c],
+        };
+        // SAFETY: checked non-null.
+        unsafe { *out = Box::into_raw(Box::new(h)) };
+        Ok(())
+    })
+}
+
+/// Free an estimator (null is ignored).
+///
+/// # Safety
+/// `e` comes from [`cs_estimator_new`] and is not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_free(e: *mut CsEstimator) {
+    if !e.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: owned handle from cs_estimator_new.
+            drop(unsafe { Box::from_raw(e) })
+        }));
+    }
+}
+
+/// Number of unknowns, or 0 for a null handle.
+///
+/// # Safety
+/// `e` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_unknown_count(e: *const CsEstimator) -> usize {
+    // SAFETY: live handle or null.
+    unsafe { e.as_ref() }.map_or(0, |e| e.est.theta().len())
+}
+
+/// Number of cables, or 0 for a null handle.
+///
+/// # Safety
+/// `e` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_cable_count(e: *const CsEstimator) -> usize {
+    // SAFETY: live handle or null.
+    unsafe { e.as_ref() }.map_or(0, |e| e.lengths.len())
+}
+
+/// One sample: `changes[n]` cable length changes (m; NaN = missing), `sigma[n]`
+/// noise per cable (m; NaN = the scene's `noise_m`) or null. The outcome is in
+/// `*info` (may be null). No allocation after the first tick.
+///
+/// # Safety
+/// `e` is a live handle; `changes` (and `sigma` unless null) hold `n` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_tick(
+    e: *mut CsEstimator,
+    changes: *const f64,
+    sigma: *const f64,
+    n: usize,
+    info: *mut CsEstimateInfo,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { e.as_mut() }.ok_or_else(|| bad("estimator is null"))?;
+        let c = h.lengths.len();
+        if n != c || changes.is_null() {
+            return Err(bad(format!("n = {n} changes (non-null) for {c} cables")));
+        }
+        // SAFETY: n doubles per the contract.
+        h.changes
+            .copy_from_slice(unsafe { std::slice::from_raw_parts(changes, n) });
+        let with_sigma = !sigma.is_null();
+        if with_sigma {
+            // SAFETY: n doubles per the contract.
+            h.sigma
+                .copy_from_slice(unsafe { std::slice::from_raw_parts(sigma, n) });
+        }
+        let status = h.est.tick(&h.changes, with_sigma.then_some(&h.sigma[..]));
+        // RMS of the weighted residuals, as `Estimate::rms_sigma`
+        h.est.model().cable_lengths_into(&mut h.lengths);
+        let noise = h.est.spec().noise_m;
+        let (mut chi2, mut count) = (0.0, 0usize);
+        for j in 0..c {
+            let s = if with_sigma && h.sigma[j].is_finite() && h.sigma[j] > 0.0 {
+                h.sigma[j]
+            } else {
+                noise
+            };
+            let r = h.lengths[j] - h.est.reference_lengths()[j] - h.changes[j];
+            if r.is_finite() {
+                chi2 += (r / s) * (r / s);
+                count += 1;
+            }
+        }
+        let rms = if count > 0 {
+            (chi2 / count as f64).sqrt()
+        } else {
+            0.0
+        };
+        // SAFETY: null or writable.
+        if let Some(info) = unsafe { info.as_mut() } {
+            *info = CsEstimateInfo {
+                status: estimate_code(status),
+                poor_fit: i32::from(rms > h.est.spec().poor_fit_rms_sigma),
+                rms_sigma: rms,
+            };
+        }
+        Ok(())
+    })
+}
+
+/// The estimate `values[p]` (SI) and, unless null, its covariance `cov[p p]`
+/// (row-major; from the sensitivities the tick ended with). No allocation.
+///
+/// # Safety
+/// `e` is a live handle; `values` holds `p` and `cov` (unless null) `p p` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_values(
+    e: *const CsEstimator,
+    values: *mut f64,
+    cov: *mut f64,
+    p: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { e.as_ref() }.ok_or_else(|| bad("estimator is null"))?;
+        let k = h.est.theta().len();
+        if p != k {
+            return Err(bad(format!("p = {p}, the estimator has {k} unknowns")));
+        }
+        // SAFETY: buffer sizes per the contract.
+        unsafe { out_slice(values, p)? }.copy_from_slice(h.est.theta());
+        if !cov.is_null() {
+            // SAFETY: p*p doubles per the contract.
+            unsafe { out_slice(cov, p * p)? }.copy_from_slice(h.est.covariance());
+        }
+        Ok(())
+    })
+}
+
+/// Tip position `[3]` (m) of the current estimate. No allocation.
+///
+/// # Safety
+/// `e` is a live handle; `position` holds 3 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_tip_position(
+    e: *const CsEstimator,
+    position: *mut f64,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { e.as_ref() }.ok_or_else(|| bad("estimator is null"))?;
+        // SAFETY: 3 doubles per the contract.
+        unsafe { out_slice(position, 3)? }.copy_from_slice(h.est.tip_position().as_slice());
+        Ok(())
+    })
+}
+
+/// Predicted cable lengths (m, absolute) at the current estimate, `n` cables. No
+/// allocation.
+///
+/// # Safety
+/// `e` is a live handle; `out` holds `n` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_cable_lengths(
+    e: *mut CsEstimator,
+    out: *mut f64,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { e.as_mut() }.ok_or_else(|| bad("estimator is null"))?;
+        if n != h.lengths.len() {
+            return Err(bad(format!("n = {n} for {} cables", h.lengths.len())));
+        }
+        // SAFETY: n doubles per the contract.
+        h.est
+            .model()
+            .cable_lengths_into(unsafe { out_slice(out, n)? });
+        Ok(())
+    })
+}

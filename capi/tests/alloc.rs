@@ -1,0 +1,189 @@
+//! The C ABI's per-tick calls do not allocate after warm-up (a counting global
+//! allocator), and a bad scene or a bad call is an error code with a message, not
+//! a crash.
+
+use cablesense_capi::*;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::ffi::{CStr, CString};
+
+struct Counting;
+
+thread_local! {
+    // per thread: the tests of this file run in parallel
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn allocs() -> usize {
+    ALLOCS.with(Cell::get)
+}
+
+// SAFETY: forwards to the system allocator, counting calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        ALLOCS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(p, l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        ALLOCS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(p, l, n) }
+    }
+}
+
+#[global_allocator]
+static A: Counting = Counting;
+
+fn scene(path: &str) -> CString {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(path);
+    CString::new(std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn last_error() -> String {
+    // SAFETY: never null, NUL-terminated.
+    unsafe { CStr::from_ptr(cs_last_error()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+fn estimator_ticks_without_allocating() {
+    let text = scene("data/scenes/track_demo.toml");
+    let mut e = std::ptr::null_mut();
+    // SAFETY: valid string and out pointer.
+    assert_eq!(
+        unsafe { cs_estimator_new(text.as_ptr(), &mut e) },
+        CsCode::Ok
+    );
+    // SAFETY: live handle from here to the free below.
+    let (c, p) = unsafe { (cs_estimator_cable_count(e), cs_estimator_unknown_count(e)) };
+    assert_eq!((c, p), (3, 2));
+    // a small force ramp: changes from the demo's first rows
+    let samples = [
+        [1.66819249e-3, -2.44597466e-3, 2.51324066e-4],
+        [1.75305037e-3, -2.51105002e-3, 2.15248435e-4],
+        [1.84344417e-3, -2.55305649e-3, 1.01207286e-4],
+    ];
+    let (mut values, mut cov, mut tip, mut len) = ([0.0; 2], [0.0; 4], [0.0; 3], [0.0; 3]);
+    let mut info = CsEstimateInfo::default();
+    let mut tick = |k: usize| unsafe {
+        // SAFETY: buffers of the stated sizes, live handle.
+        let s = &samples[k % samples.len()];
+        assert_eq!(
+            cs_estimator_tick(e, s.as_ptr(), std::ptr::null(), c, &mut info),
+            CsCode::Ok
+        );
+        assert_eq!(
+            cs_estimator_values(e, values.as_mut_ptr(), cov.as_mut_ptr(), p),
+            CsCode::Ok
+        );
+        assert_eq!(cs_estimator_tip_position(e, tip.as_mut_ptr()), CsCode::Ok);
+        assert_eq!(
+            cs_estimator_cable_lengths(e, len.as_mut_ptr(), c),
+            CsCode::Ok
+        );
+    };
+    for k in 0..5 {
+        tick(k);
+    }
+    let before = allocs();
+    for k in 0..50 {
+        tick(k);
+    }
+    let n = allocs() - before;
+    assert_eq!(n, 0, "{n} allocations in 50 warm ticks");
+    assert_eq!(info.status, 0);
+    assert_eq!(info.poor_fit, 0);
+    assert!(info.rms_sigma < 3.0, "{}", info.rms_sigma);
+    assert!(cov[0] > 0.0 && tip[0] > 0.3);
+    // SAFETY: owned handle.
+    unsafe { cs_estimator_free(e) };
+}
+
+#[test]
+fn forward_model_solves_and_reports() {
+    let text = scene("data/scenes/demo_two_section.toml");
+    let mut m = std::ptr::null_mut();
+    // SAFETY: valid string and out pointer; the handle lives until the free below.
+    unsafe {
+        assert_eq!(cs_model_new(text.as_ptr(), &mut m), CsCode::Ok);
+        let mut info = CsSolveInfo::default();
+        assert_eq!(cs_model_solve(m, 0, &mut info), CsCode::Ok);
+        assert_eq!(info.status, 0, "{info:?}");
+        let n = cs_model_section_count(m);
+        let (mut pos, mut rot) = (vec![0.0; 3 * n], vec![0.0; 9 * n]);
+        assert_eq!(
+            cs_model_section_poses(m, pos.as_mut_ptr(), rot.as_mut_ptr(), n),
+            CsCode::Ok
+        );
+        let (mut tp, mut tr) = ([0.0; 3], [0.0; 9]);
+        assert_eq!(
+            cs_model_tip_pose(m, tp.as_mut_ptr(), tr.as_mut_ptr()),
+            CsCode::Ok
+        );
+        // the same shape (recomputed: equal to rounding)
+        for (a, b) in pos[3 * (n - 1)..]
+            .iter()
+            .chain(&rot[9 * (n - 1)..])
+            .zip(tp.iter().chain(&tr))
+        {
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+        let c = cs_model_cable_count(m);
+        let mut len = vec![0.0; c];
+        assert_eq!(cs_model_cable_lengths(m, len.as_mut_ptr(), c), CsCode::Ok);
+        assert!(len.iter().all(|l| *l > 0.1), "{len:?}");
+        // wrong buffer length: an error with a message
+        assert_eq!(
+            cs_model_cable_lengths(m, len.as_mut_ptr(), c + 1),
+            CsCode::BadArgument
+        );
+        assert!(last_error().contains("cables"), "{}", last_error());
+        cs_model_free(m);
+    }
+}
+
+#[test]
+fn bad_scenes_are_errors_with_the_field_path() {
+    let bad = CString::new(
+        std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scenes/track_demo.toml"),
+        )
+        .unwrap()
+        .replacen("length_m = 0.39", "length_m = -0.39", 1),
+    )
+    .unwrap();
+    let mut e = std::ptr::null_mut();
+    // SAFETY: valid string and out pointer.
+    assert_eq!(
+        unsafe { cs_estimator_new(bad.as_ptr(), &mut e) },
+        CsCode::BadScene
+    );
+    assert!(e.is_null());
+    let msg = last_error();
+    assert_eq!(
+        msg.matches("robot.sections[0].length_m must be > 0, got -0.39")
+            .count(),
+        1,
+        "{msg}"
+    );
+    let no_estimate = scene("data/scenes/demo_two_section.toml");
+    // SAFETY: valid string and out pointer.
+    assert_eq!(
+        unsafe { cs_estimator_new(no_estimate.as_ptr(), &mut e) },
+        CsCode::BadScene
+    );
+    assert!(last_error().contains("[estimate]"));
+    // SAFETY: null arguments are checked.
+    assert_eq!(
+        unsafe { cs_model_new(std::ptr::null(), &mut std::ptr::null_mut()) },
+        CsCode::BadArgument
+    );
+}
