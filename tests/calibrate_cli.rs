@@ -78,6 +78,9 @@ fn recording_mode_writes_a_calibrated_scene_residuals_and_report() {
     ] {
         assert!(svg.contains(v), "{v}");
     }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["params"].as_array().unwrap().len(), 11);
     let _ = std::fs::remove_dir_all(&out);
 }
 

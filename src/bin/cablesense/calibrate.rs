@@ -63,6 +63,9 @@ pub struct Args {
     /// Recording mode: input columns `a,b,...` (default: every tension_*, force_*, mass_*).
     #[arg(long)]
     inputs: Option<String>,
+    /// Recording mode: time column (s) (default from the scene, else `t_s` when present).
+    #[arg(long)]
+    time_column: Option<String>,
     /// Recording mode: arc length (m) of the body the marker is on (default: the tip).
     #[arg(long)]
     marker_s: Option<f64>,
@@ -75,7 +78,8 @@ pub struct Args {
     /// Recording mode: worker threads over row chunks.
     #[arg(long, default_value_t = 2)]
     threads: usize,
-    /// Recording mode: output directory (calibrated.toml, residuals.csv, report.svg).
+    /// Recording mode: output directory (calibrated.toml, residuals.csv, report.svg,
+    /// report.json with every fitted value, statistic and row).
     #[arg(long, default_value = "out/calibrate")]
     out: PathBuf,
     /// Recording mode: input column for the "error against input" plot.
@@ -287,6 +291,9 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     if let Some(i) = &a.inputs {
         spec.inputs = i.split(',').map(|x| x.trim().to_string()).collect();
     }
+    if a.time_column.is_some() {
+        spec.time_column = a.time_column.clone();
+    }
     if a.marker_s.is_some() {
         spec.marker_s_m = a.marker_s;
     }
@@ -397,11 +404,15 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
         input: a.plot_input.clone(),
     };
     write_report_svg(&svg_path, &report, &opts)?;
+    let json_path = a.out.join("report.json");
+    std::fs::write(&json_path, serde_json::to_string_pretty(&report)?)
+        .with_context(|| format!("writing {}", json_path.display()))?;
     println!(
-        "wrote {}, {}, {}",
+        "wrote {}, {}, {}, {}",
         toml_path.display(),
         csv_path.display(),
-        svg_path.display()
+        svg_path.display(),
+        json_path.display()
     );
     Ok(
         if report.status == cablesense::calibrate::LmStatus::Converged {
