@@ -202,3 +202,53 @@ fn nearly_equal_columns_are_flagged_as_correlated() {
         .iter()
         .any(|u| u.to_string().contains(" r ")));
 }
+
+/// (d) The same path given twice: the later write wins, so the first copy has no
+/// effect; it is named in a warning and in a null direction, with no standard error,
+/// while the second copy is fitted with a finite one.
+#[test]
+fn the_same_path_twice_is_reported() {
+    let e = path("robot/sections/*/youngs_modulus_pa");
+    let t = Truth {
+        values: vec![58e9],
+        ..truth()
+    };
+    let text = synthesise(std::slice::from_ref(&e), &t, 10, 1e-4, 11, LengthUnit::M);
+    let rec = parse("twice.csv", &text, LengthUnit::M);
+    let params = vec![e.clone(), e.clone()];
+    let model = TensionModel::new(&scene(), &params, &rec.input_names, None).unwrap();
+    let setup = CalibrationSetup {
+        model: &model,
+        params: vec![
+            FitParam::from_spec(&ParamSpec::new(e.as_str()), 60e9),
+            FitParam::from_spec(&ParamSpec::new(e.as_str()), 60e9),
+        ],
+        frame: FrameSetup {
+            capture_to_base: t.frame,
+            marker_offset_m: t.offset,
+            fit_capture_frame: false,
+            fit_marker_offset: false,
+        },
+        train: &rec,
+        val: None,
+        robot_length_m: 0.2,
+    };
+    let settings = CalibrationSettings {
+        capture_noise_m: 1e-4,
+        ..CalibrationSettings::default()
+    };
+    let report = calibrate(&setup, &settings, &mut |_| {}).unwrap();
+    assert!(
+        report.warnings.iter().any(|w| w.contains("given twice")),
+        "{:?}",
+        report.warnings
+    );
+    let d = direction(&report.statistics.unidentifiable);
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert_eq!(d[0].0, e.as_str());
+    assert!(report.params[0].std_error.is_nan());
+    // the effective copy: 58 GPa within 4 reported standard errors
+    let p = &report.params[1];
+    assert!(p.std_error.is_finite(), "{p:?}");
+    assert!((p.value - 58e9).abs() < 4.0 * p.std_error, "{p:?}");
+}

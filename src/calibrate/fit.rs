@@ -573,6 +573,15 @@ pub fn calibrate<M: CalibrationModel + Clone>(
         fd_disagreement: Vec::new(),
     };
     let mut warnings = Vec::new();
+    for (i, p) in params.iter().enumerate() {
+        if params[..i].iter().any(|q| q.name == p.name) {
+            warnings.push(format!(
+                "parameter {} is given twice: the model sees one value, so the data cannot \
+                 separate the two (expect a null direction below)",
+                p.name
+            ));
+        }
+    }
     // stage 1: model at the initial values, closed-form frame, unit check
     pb.ensure_poses(&full[..ns])?;
     let (model_pts, _) = pb.points(&full);
