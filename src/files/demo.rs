@@ -55,6 +55,10 @@ pub const FILES: &[DemoFile] = &[
         "the real three-segment, nine-tendon FTDCR v4 (displacement-driven tendons; `solve --readings`, `track`)"
     ),
     demo!(
+        "scenes/tdcr_modeling.toml",
+        "the two-segment robot of the C++ project tdcr-modeling (exact against condensed coupling)"
+    ),
+    demo!(
         "scenes/tdcr_two_segment.toml",
         "textbook two-segment tendon-driven robot (displacement-driven tendons)"
     ),
