@@ -44,6 +44,34 @@ pub struct LineError {
     pub fatal: bool,
 }
 
+impl LineError {
+    /// An error of one line; the stream goes on.
+    pub fn new(line: usize, field: impl Into<String>, why: impl Into<String>) -> Self {
+        Self {
+            line,
+            field: field.into(),
+            why: why.into(),
+            fatal: false,
+        }
+    }
+}
+
+/// A cell (CSV) or value (JSON) of column `field` that must be a finite number.
+pub fn finite_cell(line: usize, field: &str, cell: &str) -> Result<f64, LineError> {
+    let v: f64 = cell
+        .parse()
+        .map_err(|_| LineError::new(line, field, format!("`{cell}` is not a number")))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(LineError::new(
+            line,
+            field,
+            format!("`{cell}` is not finite"),
+        ))
+    }
+}
+
 /// Input format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -115,12 +143,7 @@ impl StreamParser {
     }
 
     fn err(line: usize, field: impl Into<String>, why: impl Into<String>) -> LineError {
-        LineError {
-            line,
-            field: field.into(),
-            why: why.into(),
-            fatal: false,
-        }
+        LineError::new(line, field, why)
     }
 
     /// A fatal header error: the stream stops here.
@@ -188,12 +211,7 @@ impl StreamParser {
                 }
                 continue;
             }
-            let v: f64 = cell
-                .parse()
-                .map_err(|_| Self::err(line, name.clone(), format!("`{cell}` is not a number")))?;
-            if !v.is_finite() {
-                return Err(Self::err(line, name, format!("`{cell}` is not finite")));
-            }
+            let v = finite_cell(line, &name, cell)?;
             match col {
                 Col::Time => s.t_s = Some(v),
                 Col::Change(j) => s.changes_m[*j] = v,

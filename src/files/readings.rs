@@ -18,7 +18,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::measure::LineError;
+use super::measure::{finite_cell, LineError};
 
 /// The `[readings]` table of a scene: how to read a readings file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -107,14 +107,10 @@ impl ReadingsParser {
         }
     }
 
+    /// A non-fatal error: even a bad header is not fatal here (the parser waits for
+    /// the next valid one).
     fn err(line: usize, field: impl Into<String>, why: impl Into<String>) -> LineError {
-        LineError {
-            line,
-            field: field.into(),
-            why: why.into(),
-            // a bad header is not fatal here: the parser waits for the next valid one
-            fatal: false,
-        }
+        LineError::new(line, field, why)
     }
 
     fn classify(&self, name: &str) -> Col {
@@ -229,12 +225,7 @@ impl ReadingsParser {
             let Some(cell) = cell.filter(|c| !c.is_empty()) else {
                 continue;
             };
-            let v: f64 = cell
-                .parse()
-                .map_err(|_| Self::err(line, name.clone(), format!("`{cell}` is not a number")))?;
-            if !v.is_finite() {
-                return Err(Self::err(line, name, format!("`{cell}` is not finite")));
-            }
+            let v = finite_cell(line, &name, &cell)?;
             match col {
                 Col::Time => row.t_s = Some(v),
                 Col::Reading(i) => row.readings_m[i] = v * self.spec.scale_m,

@@ -88,8 +88,10 @@ pub struct TendonWorkspace {
     /// Tensions of the driven tendons (N) and the trial point.
     t: Vec<f64>,
     t_trial: Vec<f64>,
-    /// Taut flags.
+    /// Taut flags, and before the last step (an active-set change needs a fresh
+    /// Jacobian).
     taut: Vec<bool>,
+    taut_before: Vec<bool>,
     /// Residual `G` and Newton step.
     g: Vec<f64>,
     step: Vec<f64>,
@@ -102,9 +104,6 @@ pub struct TendonWorkspace {
     lu: DenseLu,
     /// `sens` is from the current point (else from an earlier one: chord steps).
     sens_fresh: bool,
-    lu_fresh_at_step: bool,
-    /// `lu` holds a factorised Jacobian that chord steps may reuse.
-    lu_ok: bool,
     /// Friction: `mu`, deadband, per-tendon direction (-1 pulled in, +1 paid out, 0
     /// at rest), last readings, factor scratch and length-weighted mean factor.
     mu: f64,
@@ -203,6 +202,7 @@ impl TendonWorkspace {
             t: mech.iter().map(|m| m.pretension_n).collect(),
             t_trial: vec![0.0; p],
             taut: vec![true; p],
+            taut_before: vec![true; p],
             g: vec![0.0; p],
             step: vec![0.0; p],
             theta: vec![0.0; np],
@@ -211,8 +211,6 @@ impl TendonWorkspace {
             lengths: vec![0.0; nc],
             lu: DenseLu::new(p),
             sens_fresh: false,
-            lu_fresh_at_step: false,
-            lu_ok: false,
             mu,
             deadband,
             sign: vec![0.0; p],
@@ -403,8 +401,10 @@ impl TendonWorkspace {
             }
         }
         let mut merit = self.merit();
+        // a fresh Jacobian (sweep at the current point) for the first step, after a
+        // failed step, a step that contracted |G| by less than 10x, or a change of the
+        // active set; otherwise a chord step reuses the last factorisation
         let mut need_fresh = true;
-        self.lu_ok = false;
         for it in 0..self.settings.max_iterations {
             self.report.iterations = it;
             let friction_settled = self.refresh_factors();
@@ -420,9 +420,8 @@ impl TendonWorkspace {
                 self.report.status = SolveStatus::Converged;
                 return Ok(self.finish());
             }
-            // a chord step reuses the last factorised Jacobian; a fresh sweep when
-            // the last step did not contract enough or the active set changed
-            if !self.lu_ok || need_fresh {
+            let fresh = need_fresh;
+            if fresh {
                 if !self.sens_fresh && !self.evaluate(Start::Warm, true) {
                     return Ok(self.finish());
                 }
@@ -430,13 +429,13 @@ impl TendonWorkspace {
                     self.report.status = SolveStatus::IllConditioned;
                     return Ok(self.finish());
                 }
-                self.lu_ok = true;
             } else {
                 self.chord_step();
             }
             let merit_before = merit;
-            let taut_before = self.taut_mask();
-            // projected backtracking line search on max |G|
+            self.taut_before.copy_from_slice(&self.taut);
+            // projected backtracking line search on max |G| (a chord step gets one
+            // trial: if it needs damping, the step is redone with a fresh Jacobian)
             self.t_trial.copy_from_slice(&self.t);
             let mut alpha = 1.0;
             let mut accepted = false;
@@ -452,27 +451,24 @@ impl TendonWorkspace {
                         break;
                     }
                 }
-                alpha *= 0.5;
-                if !self.sens_fresh && self.lu_ok && !need_fresh {
-                    // a chord step that needs damping: retry with a fresh Jacobian
+                if !fresh {
                     break;
                 }
+                alpha *= 0.5;
             }
-            need_fresh = !accepted || merit > 0.1 * merit_before || self.taut_mask() != taut_before;
-            if !accepted && !self.lu_was_fresh() {
+            need_fresh = !accepted || merit > 0.1 * merit_before || self.taut != self.taut_before;
+            if !accepted {
+                // back to the last point; a failed chord step retries with a fresh
+                // Jacobian there, a failed Newton step has nowhere to go
                 self.t.copy_from_slice(&self.t_trial);
-                if !self.evaluate(Start::Warm, true) {
+                if !self.evaluate(Start::Warm, !fresh) {
                     return Ok(self.finish());
                 }
                 merit = self.merit();
-                self.lu_ok = false;
-                continue;
-            }
-            if !accepted {
-                self.t.copy_from_slice(&self.t_trial);
-                self.evaluate(Start::Warm, false);
-                self.report.status = SolveStatus::Stalled;
-                return Ok(self.finish());
+                if fresh {
+                    self.report.status = SolveStatus::Stalled;
+                    return Ok(self.finish());
+                }
             }
         }
         self.report.iterations = self.settings.max_iterations;
@@ -533,22 +529,8 @@ impl TendonWorkspace {
         true
     }
 
-    /// Bit mask of taut tendons (for detecting a change of the active set).
-    fn taut_mask(&self) -> u64 {
-        self.taut
-            .iter()
-            .enumerate()
-            .fold(0, |m, (i, t)| if *t { m | (1 << (i % 64)) } else { m })
-    }
-
-    /// Whether the factorised Jacobian came from a sweep at the step's start point.
-    fn lu_was_fresh(&self) -> bool {
-        self.lu_fresh_at_step
-    }
-
     /// Step with the factorised Jacobian of an earlier point (chord Newton).
     fn chord_step(&mut self) {
-        self.lu_fresh_at_step = false;
         for (s, g) in self.step.iter_mut().zip(&self.g) {
             *s = -g;
         }
@@ -557,7 +539,6 @@ impl TendonWorkspace {
 
     /// Semi-smooth Newton step `J step = -G` with the generalized Jacobian.
     fn newton_step(&mut self) -> bool {
-        self.lu_fresh_at_step = true;
         let p = self.driven.len();
         let np = self.theta.len();
         let a = self.lu.matrix_mut();
@@ -599,9 +580,7 @@ impl TendonWorkspace {
             let f = &mut self.factors[i];
             capstan_factors(self.mu, self.sign[i], &axis, &base, holes, f);
             let old = self.ws.chord_factors(j);
-            if old.iter().zip(f.iter()).any(|(a, b)| (a - b).abs() > 1e-13) {
-                settled = false;
-            }
+            let changed = old.iter().zip(f.iter()).any(|(a, b)| (a - b).abs() > 1e-13);
             // length-weighted mean factor of the chords, for the stretch
             let (mut prev, mut total, mut weighted) = (base, 0.0, 0.0);
             for (h, fk) in holes.iter().zip(f.iter()) {
@@ -611,7 +590,11 @@ impl TendonWorkspace {
                 prev = *h;
             }
             self.mean_factor[i] = if total > 0.0 { weighted / total } else { 1.0 };
-            self.ws.set_chord_factors(j, &self.factors[i]);
+            if changed {
+                // (setting them invalidates the last pass: only when they moved)
+                self.ws.set_chord_factors(j, &self.factors[i]);
+                settled = false;
+            }
         }
         settled
     }
