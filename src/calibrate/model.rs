@@ -10,7 +10,7 @@ use super::CalibrationError;
 use crate::files::Scene;
 use crate::loads::Loads;
 use crate::statics::{Pose, Start, Workspace};
-use crate::validation::{set_params, ParamPath};
+use crate::validation::{set_values, ParamPath};
 use nalgebra::{Matrix3, Vector3};
 
 /// A model to calibrate: given parameter values, predict each row's marker body pose.
@@ -260,13 +260,7 @@ impl TensionModel {
 
     /// The scene with the parameters at `values` (validated).
     pub fn scene_with(&self, values: &[f64]) -> Result<Scene, CalibrationError> {
-        let pairs: Vec<(ParamPath, f64)> = self
-            .params
-            .iter()
-            .cloned()
-            .zip(values.iter().copied())
-            .collect();
-        let scene = set_params(&self.scene, &pairs)?;
+        let scene = set_values(&self.scene, &self.params, values)?;
         scene.validate().map_err(|source| CalibrationError::Model {
             context: format!("scene with {values:?}"),
             source,

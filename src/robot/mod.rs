@@ -238,6 +238,15 @@ impl Robot {
         Ok(out)
     }
 
+    /// Smallest bending stiffness `min_i min(C_i[0], C_i[1])` over the sections
+    /// (N m^2; thesis eq. 2.12): the scale of the load intensity and the residual floor.
+    pub fn min_bending_stiffness(&self) -> f64 {
+        self.sections
+            .iter()
+            .map(|s| s.stiffness.bend_twist.x.min(s.stiffness.bend_twist.y))
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Capstan friction coefficient (0 when the robot has no `friction` table).
     pub fn friction_mu(&self) -> f64 {
         self.spec.friction.as_ref().map_or(0.0, |f| f.mu)

@@ -50,11 +50,7 @@ pub(crate) fn residual_floor(
     theta: &[f64],
     intensity: f64,
 ) -> f64 {
-    let ei = robot
-        .sections()
-        .iter()
-        .map(|s| s.stiffness.bend_twist.x.min(s.stiffness.bend_twist.y))
-        .fold(f64::INFINITY, f64::min);
+    let ei = robot.min_bending_stiffness();
     let length = robot.length();
     let sections = robot.sections().len() as f64;
     let steps = match settings.integrator {

@@ -35,11 +35,7 @@ pub(crate) fn load_intensity(
     params: &[ParamSite],
     theta: &[f64],
 ) -> f64 {
-    let ei = robot
-        .sections()
-        .iter()
-        .map(|s| s.stiffness.bend_twist.x.min(s.stiffness.bend_twist.y))
-        .fold(f64::INFINITY, f64::min);
+    let ei = robot.min_bending_stiffness();
     if ei.is_nan() || ei <= 0.0 {
         return f64::INFINITY;
     }

@@ -136,7 +136,7 @@ impl TendonWorkspace {
         let mut mech = Vec::new();
         let mut columns = Vec::new();
         let mut geo = Vec::new();
-        let ei = robot.sections()[0].stiffness.bend_twist.x;
+        let ei = robot.min_bending_stiffness();
         for (j, c) in robot.cables().iter().enumerate() {
             let field = format!("robot.cables[{j}]");
             match c.actuation {

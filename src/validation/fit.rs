@@ -23,7 +23,7 @@
 //! one (data/thesis/README.md, "Fitting method").
 
 use super::compare::compare;
-use super::param::{set_params, ParamPath};
+use super::param::{set_values, ParamPath};
 use super::tables::TableData;
 use super::ValidationError;
 use crate::calibrate::{Bounds, LeastSquares, LmSettings, LmStatus};
@@ -228,13 +228,7 @@ impl FitProblem {
 
     /// The scene with the parameters set to `values`.
     pub fn scene_with(&self, values: &[f64]) -> Result<Scene, ValidationError> {
-        let pairs: Vec<(ParamPath, f64)> = self
-            .params
-            .iter()
-            .cloned()
-            .zip(values.iter().copied())
-            .collect();
-        let scene = set_params(&self.scene, &pairs)?;
+        let scene = set_values(&self.scene, &self.params, values)?;
         scene.validate().map_err(|cause| ValidationError::Model {
             context: format!("scene with {}", describe(&self.params, values)),
             cause,

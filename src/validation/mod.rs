@@ -28,7 +28,7 @@ pub use compare::{
 pub use fit::{fit, FitMethod, FitProblem, FitReport, FitSettings, FitStatus, Target};
 pub use fitted::{FitRecord, FitRun, FittedFile, ParamValue, SceneFits, FITTED_FILE};
 pub use inverse::{table_4_5_inverse, table_4_5_inverse_from, InverseRow, READING_SIGMA_M};
-pub use param::{set_params, ParamPath};
+pub use param::{set_params, set_values, ParamPath};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
 
 use crate::error::ModelError;

@@ -195,6 +195,17 @@ pub fn set_params(scene: &Scene, params: &[(ParamPath, f64)]) -> Result<Scene, V
     })
 }
 
+/// [`set_params`] with the paths and their values side by side (extra values or
+/// paths are ignored).
+pub fn set_values(
+    scene: &Scene,
+    params: &[ParamPath],
+    values: &[f64],
+) -> Result<Scene, ValidationError> {
+    let pairs: Vec<(ParamPath, f64)> = params.iter().cloned().zip(values.iter().copied()).collect();
+    set_params(scene, &pairs)
+}
+
 fn to_value(scene: &Scene) -> Result<Value, ValidationError> {
     serde_json::to_value(scene)
         .map_err(|e| ValidationError::Fitted(format!("serializing the scene: {e}")))
