@@ -24,6 +24,7 @@ mod fit;
 mod frame;
 mod lm;
 mod model;
+mod readings_model;
 mod recording;
 mod report;
 mod spec;
@@ -39,6 +40,7 @@ pub use lm::{
     LmSettings, LmStatus,
 };
 pub use model::{finite_differences, CalibrationModel, Sensitivities, TensionModel};
+pub use readings_model::{ReadingsModel, SceneModel};
 pub use recording::{is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow};
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
 pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec};

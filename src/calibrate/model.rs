@@ -380,7 +380,7 @@ impl CalibrationModel for TensionModel {
 }
 
 /// Pose at arc length `s` between the samples (position linear, rotation geodesic).
-fn pose_at(samples: &[crate::statics::Sample], s: f64) -> Pose {
+pub(super) fn pose_at(samples: &[crate::statics::Sample], s: f64) -> Pose {
     let i = samples
         .iter()
         .rposition(|x| x.s <= s)

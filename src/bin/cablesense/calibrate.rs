@@ -14,7 +14,7 @@ use anyhow::Context;
 use cablesense::calibrate::{
     calibrate, calibrated_scene, parse_row_range, write_report_svg, write_residuals_csv,
     CalibrationReport, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup,
-    ParamSpec, Recording, RigidTransform, Stage, TensionModel,
+    ParamSpec, ReadingsModel, Recording, RigidTransform, SceneModel, Stage,
 };
 use cablesense::files::demo::DataSource;
 use cablesense::nalgebra::Vector3;
@@ -288,6 +288,10 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     if a.huber.is_some() {
         spec.huber_sigma = a.huber;
     }
+    if spec.inputs.is_empty() {
+        // a tendon-driven scene: its servo reading columns are the inputs
+        spec.inputs = ReadingsModel::reading_columns(&scene);
+    }
     if let Some(i) = &a.inputs {
         spec.inputs = i.split(',').map(|x| x.trim().to_string()).collect();
     }
@@ -332,7 +336,7 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
         .iter()
         .map(|p| p.path.parse())
         .collect::<Result<_, _>>()?;
-    let model = TensionModel::new(&scene, &paths, &train.input_names, spec.marker_s_m)?;
+    let model = SceneModel::new(&scene, &paths, &train.input_names, spec.marker_s_m)?;
     let params: Vec<FitParam> = spec
         .params
         .iter()

@@ -1,0 +1,232 @@
+//! The calibration model of a tendon-driven robot: each row's servo readings drive
+//! the displacement-driven tendons ([`crate::tendons::TendonWorkspace`]), solved warm
+//! row after row (so friction's direction memory follows the recording), and the
+//! pose of the body the marker sits on is predicted. [`SceneModel`] chooses it or
+//! [`TensionModel`] from the scene.
+
+use super::model::{pose_at, CalibrationModel, TensionModel};
+use super::recording::RecordingRow;
+use super::CalibrationError;
+use crate::files::Scene;
+use crate::statics::{Pose, Start};
+use crate::tendons::{Actuation, TendonWorkspace};
+use crate::validation::{set_values, ParamPath};
+
+/// Servo readings -> tendon tensions and shape -> marker body pose.
+pub struct ReadingsModel {
+    scene: Scene,
+    params: Vec<ParamPath>,
+    values: Vec<f64>,
+    /// Per driven tendon: its column's index in a row's inputs.
+    columns: Vec<usize>,
+    /// Metres per unit of the reading columns (`[readings] scale_m`).
+    scale: f64,
+    marker_s: Option<f64>,
+    ws: TendonWorkspace,
+    q: Vec<f64>,
+    cold: bool,
+}
+
+fn model_err(context: String) -> impl FnOnce(crate::ModelError) -> CalibrationError {
+    move |source| CalibrationError::Model { context, source }
+}
+
+impl ReadingsModel {
+    /// A model of `scene` (with displacement-driven tendons) calibrating `params`;
+    /// every driven tendon's reading column must be among `input_names`.
+    pub fn new(
+        scene: &Scene,
+        params: &[ParamPath],
+        input_names: &[String],
+        marker_s: Option<f64>,
+    ) -> Result<Self, CalibrationError> {
+        let ws = scene
+            .tendon_workspace()
+            .map_err(model_err("scene".into()))?;
+        let columns = ws
+            .columns()
+            .iter()
+            .map(|c| {
+                input_names.iter().position(|n| n == c).ok_or_else(|| {
+                    CalibrationError::BadInput(format!(
+                        "no input column `{c}` for a displacement-driven tendon (inputs: {})",
+                        input_names.join(", ")
+                    ))
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let values = params
+            .iter()
+            .map(|p| p.value(scene))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            scene: scene.clone(),
+            params: params.to_vec(),
+            values,
+            q: vec![0.0; columns.len()],
+            columns,
+            scale: scene.readings.as_ref().map_or(1.0, |r| r.scale_m),
+            marker_s,
+            ws,
+            cold: true,
+        })
+    }
+
+    /// The reading columns of a scene's displacement-driven tendons (the default
+    /// inputs of a calibration), in cable order.
+    pub fn reading_columns(scene: &Scene) -> Vec<String> {
+        scene
+            .robot
+            .cables
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.actuation == Actuation::Displacement)
+            .map(|(j, c)| {
+                c.reading
+                    .clone()
+                    .or_else(|| c.name.clone())
+                    .unwrap_or_else(|| format!("cable{j}"))
+            })
+            .collect()
+    }
+}
+
+impl Clone for ReadingsModel {
+    /// A fresh model at the same parameter values (the warm state is not copied).
+    fn clone(&self) -> Self {
+        let mut m = Self {
+            scene: self.scene.clone(),
+            params: self.params.clone(),
+            values: Vec::new(),
+            columns: self.columns.clone(),
+            scale: self.scale,
+            marker_s: self.marker_s,
+            ws: self
+                .scene
+                .tendon_workspace()
+                .expect("the scene this model was built from is valid"),
+            q: self.q.clone(),
+            cold: true,
+        };
+        m.set_params(&self.values)
+            .expect("values this model already accepted");
+        m
+    }
+}
+
+impl CalibrationModel for ReadingsModel {
+    fn set_params(&mut self, values: &[f64]) -> Result<(), CalibrationError> {
+        if values == self.values.as_slice() {
+            return Ok(());
+        }
+        let context = || format!("scene with {values:?}");
+        let scene = set_values(&self.scene, &self.params, values)?;
+        scene.validate().map_err(model_err(context()))?;
+        self.ws = scene.tendon_workspace().map_err(model_err(context()))?;
+        self.values = values.to_vec();
+        self.cold = true;
+        Ok(())
+    }
+
+    fn restart(&mut self) {
+        self.cold = true;
+    }
+
+    fn predict(&mut self, row: &RecordingRow) -> Result<Pose, CalibrationError> {
+        for (q, &c) in self.q.iter_mut().zip(&self.columns) {
+            *q = row.inputs[c] * self.scale;
+        }
+        let start = if self.cold { Start::Cold } else { Start::Warm };
+        let rep = self
+            .ws
+            .solve_readings_from(&self.q, start)
+            .map_err(model_err(format!("line {}: readings", row.line)))?;
+        if !rep.status.is_converged() {
+            self.cold = true;
+            return Err(CalibrationError::NotConverged {
+                line: row.line,
+                status: rep.status,
+                residual: rep.residual_m,
+            });
+        }
+        self.cold = false;
+        let sol = self.ws.workspace_mut().solution();
+        Ok(match self.marker_s {
+            None => *sol.tip(),
+            Some(s) => pose_at(&sol.samples, s),
+        })
+    }
+}
+
+/// The calibration model a scene calls for: [`ReadingsModel`] when it has
+/// displacement-driven tendons, else [`TensionModel`].
+#[derive(Clone)]
+pub enum SceneModel {
+    /// Tension-driven (rows hold `tension_*`, `force_*`, `mass_*`).
+    Tension(Box<TensionModel>),
+    /// Servo readings of displacement-driven tendons.
+    Readings(Box<ReadingsModel>),
+}
+
+impl SceneModel {
+    /// Choose and build the model of `scene`.
+    pub fn new(
+        scene: &Scene,
+        params: &[ParamPath],
+        input_names: &[String],
+        marker_s: Option<f64>,
+    ) -> Result<Self, CalibrationError> {
+        Ok(if ReadingsModel::reading_columns(scene).is_empty() {
+            Self::Tension(Box::new(TensionModel::new(
+                scene,
+                params,
+                input_names,
+                marker_s,
+            )?))
+        } else {
+            Self::Readings(Box::new(ReadingsModel::new(
+                scene,
+                params,
+                input_names,
+                marker_s,
+            )?))
+        })
+    }
+
+    /// Current parameter values (initially the scene's).
+    pub fn values(&self) -> &[f64] {
+        match self {
+            Self::Tension(m) => m.values(),
+            Self::Readings(m) => &m.values,
+        }
+    }
+
+    /// Robot length (m).
+    pub fn robot_length(&self) -> f64 {
+        match self {
+            Self::Tension(m) => m.robot_length(),
+            Self::Readings(m) => m.ws.workspace().robot().length(),
+        }
+    }
+}
+
+impl CalibrationModel for SceneModel {
+    fn set_params(&mut self, values: &[f64]) -> Result<(), CalibrationError> {
+        match self {
+            Self::Tension(m) => m.set_params(values),
+            Self::Readings(m) => m.set_params(values),
+        }
+    }
+    fn restart(&mut self) {
+        match self {
+            Self::Tension(m) => m.restart(),
+            Self::Readings(m) => m.restart(),
+        }
+    }
+    fn predict(&mut self, row: &RecordingRow) -> Result<Pose, CalibrationError> {
+        match self {
+            Self::Tension(m) => m.predict(row),
+            Self::Readings(m) => m.predict(row),
+        }
+    }
+}
