@@ -110,7 +110,7 @@ fn tendon_robot_calibrates_back_from_servo_readings() {
         },
         train: &rec,
         val: None,
-        robot_length_m: 0.2,
+        robot_length_m: model.robot_length(),
     };
     let settings = CalibrationSettings {
         capture_noise_m: NOISE,
