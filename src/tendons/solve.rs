@@ -417,8 +417,18 @@ impl TendonWorkspace {
                 merit = self.merit();
             }
             if merit <= self.settings.tolerance_m && friction_settled {
-                self.report.status = SolveStatus::Converged;
-                return Ok(self.finish());
+                // a slack tendon carries exactly nothing: a damped step can leave a
+                // tension below tolerance / a_i on the slack branch; drop it and check
+                if !self.zero_slack_tensions() {
+                    self.report.status = SolveStatus::Converged;
+                    return Ok(self.finish());
+                }
+                if !self.evaluate(Start::Warm, false) {
+                    return Ok(self.finish());
+                }
+                merit = self.merit();
+                need_fresh = true;
+                continue;
             }
             let fresh = need_fresh;
             if fresh {
@@ -529,12 +539,37 @@ impl TendonWorkspace {
         true
     }
 
-    /// Step with the factorised Jacobian of an earlier point (chord Newton).
+    /// Set the tension of every slack-branch tendon to 0; `true` if any was not.
+    fn zero_slack_tensions(&mut self) -> bool {
+        let mut changed = false;
+        for (t, taut) in self.t.iter_mut().zip(&self.taut) {
+            if !taut && *t != 0.0 {
+                *t = 0.0;
+                changed = true;
+            }
+        }
+        changed
+    }
+
+    /// A slack row of the generalized Jacobian is `a_i e_i` and its residual
+    /// `a_i T_i`: its step is exactly `-T_i` (the LU solve leaves round-off, e.g. a
+    /// tension of 1e-24 N on a tendon reported slack).
+    fn exact_slack_steps(&mut self) {
+        for ((s, t), taut) in self.step.iter_mut().zip(&self.t).zip(&self.taut) {
+            if !taut {
+                *s = -t;
+            }
+        }
+    }
+
+    /// Step with the factorised Jacobian of an earlier point (chord Newton; the
+    /// active set is the one it was factorised with, else a fresh step is taken).
     fn chord_step(&mut self) {
         for (s, g) in self.step.iter_mut().zip(&self.g) {
             *s = -g;
         }
         self.lu.solve_in_place(&mut self.step);
+        self.exact_slack_steps();
     }
 
     /// Semi-smooth Newton step `J step = -G` with the generalized Jacobian.
@@ -563,6 +598,7 @@ impl TendonWorkspace {
             self.step[i] = -self.g[i];
         }
         self.lu.solve_in_place(&mut self.step);
+        self.exact_slack_steps();
         self.step.iter().all(|s| s.is_finite())
     }
 
