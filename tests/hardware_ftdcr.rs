@@ -1,0 +1,64 @@
+//! The hardware benchmark: the stored calibration of the real FTDCR v4
+//! (`data/calibration/ftdcr_v4_calibrated.toml`, fitted on every 5th row of
+//! `train.csv`) predicts the held-out `val.csv` (443 rows, never used in the fit) from
+//! the servo readings alone, warm-started row to row. Asserted: the val tip RMSE with
+//! the upstream convention (mean offset removed) is within 10 % of the figure the
+//! calibration stored (`ftdcr_v4_summary.json`), and below the published upstream
+//! model's 12.1 mm (`data/hardware/ftdcr_v4/README.md`). The target of 6 mm is
+//! not reached (stored: 6.85 mm) and is not asserted.
+
+use cablesense::calibrate::{
+    CalibrationModel, ColumnMap, ReadingsModel, Recording, RigidTransform, TipErrors,
+};
+use cablesense::nalgebra::Vector3;
+use cablesense::Scene;
+
+const DIR: &str = env!("CARGO_MANIFEST_DIR");
+/// Published upstream model, val RMSE with the mean offset removed (m).
+const PUBLISHED_VAL_RMSE_M: f64 = 12.1e-3;
+
+#[test]
+fn stored_calibration_reproduces_its_val_error_and_beats_the_published_model() {
+    let scene = Scene::load(format!("{DIR}/data/calibration/ftdcr_v4_calibrated.toml")).unwrap();
+    let spec = scene
+        .calibration
+        .clone()
+        .expect("calibrated scene keeps its [calibration]");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{DIR}/data/calibration/ftdcr_v4_summary.json")).unwrap(),
+    )
+    .unwrap();
+    let stored = summary["val"]["mean_removed"]["rmse_m"].as_f64().unwrap();
+    let val = Recording::load(
+        format!("{DIR}/data/hardware/ftdcr_v4/val.csv"),
+        &ColumnMap::from_spec(&spec),
+    )
+    .unwrap();
+    let frame = RigidTransform::from_vector(
+        &Vector3::from(spec.capture_to_base.rotation_vector),
+        &Vector3::from(spec.capture_to_base.translation_m),
+    );
+    let offset = Vector3::from(spec.marker_offset_m);
+    let mut model = ReadingsModel::new(&scene, &[], &val.input_names, spec.marker_s_m).unwrap();
+    let (mut predicted, mut measured) = (Vec::new(), Vec::new());
+    for row in &val.rows {
+        let pose = model.predict(row).unwrap();
+        predicted.push(pose.position + pose.rotation * offset);
+        measured.push(frame.apply(&row.marker_m));
+    }
+    let e = TipErrors::of(&predicted, &measured);
+    println!(
+        "val: raw RMSE {:.3} mm, mean offset removed {:.3} mm (stored {:.3} mm, published {:.1} mm)",
+        e.raw.rmse_m * 1e3,
+        e.mean_removed.rmse_m * 1e3,
+        stored * 1e3,
+        PUBLISHED_VAL_RMSE_M * 1e3
+    );
+    assert_eq!(e.mean_removed.count, 443);
+    assert!(
+        (e.mean_removed.rmse_m - stored).abs() <= 0.1 * stored,
+        "val RMSE {} m against stored {stored} m",
+        e.mean_removed.rmse_m
+    );
+    assert!(e.mean_removed.rmse_m < PUBLISHED_VAL_RMSE_M);
+}
