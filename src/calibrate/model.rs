@@ -260,12 +260,7 @@ impl TensionModel {
 
     /// The scene with the parameters at `values` (validated).
     pub fn scene_with(&self, values: &[f64]) -> Result<Scene, CalibrationError> {
-        let scene = set_values(&self.scene, &self.params, values)?;
-        scene.validate().map_err(|source| CalibrationError::Model {
-            context: format!("scene with {values:?}"),
-            source,
-        })?;
-        Ok(scene)
+        patched_scene(&self.scene, &self.params, values)
     }
 
     /// Robot length (m) at the current values.
@@ -371,16 +366,36 @@ impl CalibrationModel for TensionModel {
             });
         }
         self.cold = false;
-        let sol = self.ws.solution();
-        Ok(match self.marker_s {
-            None => *sol.tip(),
-            Some(s) => pose_at(&sol.samples, s),
-        })
+        Ok(marker_body_pose(&self.ws.solution(), self.marker_s))
+    }
+}
+
+/// `scene` with `params` at `values`, validated (the scene of a calibration model).
+pub(super) fn patched_scene(
+    scene: &Scene,
+    params: &[ParamPath],
+    values: &[f64],
+) -> Result<Scene, CalibrationError> {
+    let patched = set_values(scene, params, values)?;
+    patched
+        .validate()
+        .map_err(|source| CalibrationError::Model {
+            context: format!("scene with {values:?}"),
+            source,
+        })?;
+    Ok(patched)
+}
+
+/// Pose of the body the marker sits on: the tip, or the backbone at `marker_s` (m).
+pub(super) fn marker_body_pose(sol: &crate::statics::Solution, marker_s: Option<f64>) -> Pose {
+    match marker_s {
+        None => *sol.tip(),
+        Some(s) => pose_at(&sol.samples, s),
     }
 }
 
 /// Pose at arc length `s` between the samples (position linear, rotation geodesic).
-pub(super) fn pose_at(samples: &[crate::statics::Sample], s: f64) -> Pose {
+fn pose_at(samples: &[crate::statics::Sample], s: f64) -> Pose {
     let i = samples
         .iter()
         .rposition(|x| x.s <= s)

@@ -4,13 +4,13 @@
 //! pose of the body the marker sits on is predicted. [`SceneModel`] chooses it or
 //! [`TensionModel`] from the scene.
 
-use super::model::{pose_at, CalibrationModel, TensionModel};
+use super::model::{marker_body_pose, patched_scene, CalibrationModel, TensionModel};
 use super::recording::RecordingRow;
 use super::CalibrationError;
 use crate::files::Scene;
 use crate::statics::{Pose, Start};
 use crate::tendons::{Actuation, TendonWorkspace};
-use crate::validation::{set_values, ParamPath};
+use crate::validation::ParamPath;
 
 /// Servo readings -> tendon tensions and shape -> marker body pose.
 pub struct ReadingsModel {
@@ -119,10 +119,10 @@ impl CalibrationModel for ReadingsModel {
         if values == self.values.as_slice() {
             return Ok(());
         }
-        let context = || format!("scene with {values:?}");
-        let scene = set_values(&self.scene, &self.params, values)?;
-        scene.validate().map_err(model_err(context()))?;
-        self.ws = scene.tendon_workspace().map_err(model_err(context()))?;
+        let scene = patched_scene(&self.scene, &self.params, values)?;
+        self.ws = scene
+            .tendon_workspace()
+            .map_err(model_err(format!("scene with {values:?}")))?;
         self.values = values.to_vec();
         self.cold = true;
         Ok(())
@@ -150,11 +150,10 @@ impl CalibrationModel for ReadingsModel {
             });
         }
         self.cold = false;
-        let sol = self.ws.workspace_mut().solution();
-        Ok(match self.marker_s {
-            None => *sol.tip(),
-            Some(s) => pose_at(&sol.samples, s),
-        })
+        Ok(marker_body_pose(
+            &self.ws.workspace_mut().solution(),
+            self.marker_s,
+        ))
     }
 }
 
