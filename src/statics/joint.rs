@@ -7,7 +7,7 @@
 //! it reads the workspace's private buffers without widening their visibility; it
 //! adds methods only and changes none of the forward solver.
 
-use super::{max_abs, sweep, wide_sweeps, SolveStatus, Wide, Workspace};
+use super::{max_abs, sweep, SolveStatus, Wide, Workspace};
 use crate::math::Dual;
 
 /// Cumulative integration counts of one workspace (all solves and sweeps so far).
@@ -72,12 +72,19 @@ impl Workspace {
         jac_s: &mut [f64],
         jac_m: &mut [f64],
     ) -> bool {
-        self.x_trial.copy_from_slice(x);
-        if !self.eval_trial(1.0) {
-            return false;
+        // the next holes must be settled at `x` and the current theta: skip the pass
+        // when the last one was exactly that (e.g. right after `adopt_unknowns`)
+        if self.last_pass != Some(1.0) || self.b64.x != x {
+            self.x_trial.copy_from_slice(x);
+            if !self.eval_trial(1.0) {
+                return false;
+            }
         }
         let (plan, b64) = (&self.plan, &mut self.b64);
-        let ok = with_wide!(&mut self.wide, b => wide_sweeps(plan, x, w, true, b, b64, jac_s, jac_m, 1.0), false);
+        let ok = self
+            .wide
+            .as_mut()
+            .is_some_and(|b| b.sweeps(plan, x, w, true, b64, jac_s, jac_m, 1.0));
         if x != self.x.as_slice() {
             self.eval_at(false, 1.0);
         }
@@ -126,7 +133,7 @@ impl Workspace {
             f64_rhs: self.b64.rhs_evals,
             dual_rhs: self.b3.rhs_evals
                 + self.b6.rhs_evals
-                + with_wide!(&self.wide, b => b.rhs_evals, 0),
+                + self.wide.as_ref().map_or(0, Wide::rhs_evals),
         }
     }
 }

@@ -14,11 +14,17 @@
 //! `q <- q + M (p(q) - q)` with `M = (I - dp/dq)^-1` from the last dual sweep (the
 //! plain fixed point `M = I` before any sweep; the map contracts by roughly
 //! `T (h^2/6 + rho h/2) / EI` for chord `h` and hole radius `rho`). A dual pass does not
-//! iterate: it seeds `q` along extra local directions, and at the next disk folds
-//! them into the outer ones with `dq/dz = (I - dp/dq)^-1 dp/dz|_q` (the implicit
-//! function theorem for the segment), so its outer derivatives are exact.
+//! iterate. The assumed holes act on the rod only through the jump `j` of `(n, m)`
+//! at their disk, `dj = B dq` (`B`, 6 x 3k, from the chord directions), so the pass
+//! seeds six local directions on that jump and reads `a = dp/dz` (outer directions)
+//! and `C = dp/dj` at the next disk. The consistent `dq = a dz + C B dq` gives the
+//! jump's derivative `dj/dz = (I - B C)^-1 B a` (push-through identity: a 6 x 6
+//! solve whatever the number `k` of cables), which is folded into the outer
+//! directions (the implicit function theorem for the segment), so the outer
+//! derivatives are exact; `M = I + C (I - B C)^-1 B` (Woodbury) is handed to the
+//! `f64` passes.
 
-use super::plan::{Event, ParamSite, Plan};
+use super::plan::{Event, ParamSite, Plan, JUMP_DIRS};
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
 use crate::math::Real;
 use nalgebra::{Matrix3, Vector3};
@@ -84,6 +90,13 @@ pub(crate) struct PassBuf<T: Real> {
     pub mlin: Vec<Vec<f64>>,
     /// `mlin` holds matrices from a sweep (else the plain fixed point is used).
     pub mlin_valid: bool,
+    /// Dual passes: `B = d(n, m)/dq` of the last disk with pending chords
+    /// (`6 x L` row-major).
+    jump_b: Vec<f64>,
+    /// Local iteration of `f64` passes: `H` (`L x L`), last error and step.
+    settle_h: Vec<f64>,
+    prev_err: Vec<f64>,
+    prev_step: Vec<f64>,
     /// Condensed coupling: pose of each guide when its `next` holes were last
     /// settled (`f64` passes); a new pass carries `next` along rigidly from it.
     pub anchor: Vec<(Vector3<f64>, Matrix3<f64>)>,
@@ -119,7 +132,11 @@ impl<T: Real> PassBuf<T> {
                 .collect(),
             mlin_valid: false,
             anchor: vec![(Vector3::zeros(), Matrix3::identity()); plan.pending.len()],
-            lin: vec![0.0; plan.max_local * (plan.max_local + T::DIRS + plan.max_local)],
+            lin: vec![0.0; 36 + JUMP_DIRS * (T::DIRS + 2 * plan.max_pending_dirs)],
+            jump_b: vec![0.0; JUMP_DIRS * plan.max_pending_dirs],
+            settle_h: vec![0.0; plan.max_pending_dirs * plan.max_pending_dirs],
+            prev_err: vec![0.0; plan.max_pending_dirs],
+            prev_step: vec![0.0; plan.max_pending_dirs],
             watch: false,
             conjugate_at: None,
         }
@@ -167,14 +184,7 @@ struct Checkpoint<T: Real> {
     iterations: usize,
     /// Largest hole error of the previous attempt (m).
     last_error: f64,
-    /// Local iteration matrix (`L x L`) and the previous attempt's error and step.
-    h: [f64; MAX_LOCAL * MAX_LOCAL],
-    prev_err: [f64; MAX_LOCAL],
-    prev_step: [f64; MAX_LOCAL],
 }
-
-/// Largest number of local directions (3 per condensed cable).
-const MAX_LOCAL: usize = 3 * super::plan::MAX_CONDENSED_CABLES;
 
 #[inline]
 fn v3<T: Real>(v: &Vector3<f64>) -> Vector3<T> {
@@ -375,9 +385,6 @@ pub(crate) fn pass<T: Real>(
                         h_adapt,
                         iterations: 0,
                         last_error: f64::INFINITY,
-                        h: [0.0; MAX_LOCAL * MAX_LOCAL],
-                        prev_err: [0.0; MAX_LOCAL],
-                        prev_step: [0.0; MAX_LOCAL],
                     });
                 }
             }
@@ -511,14 +518,14 @@ fn apply_event<T: Real>(
                 };
                 let mut f = unit(prev - p).map(|x| x * t);
                 if k + 1 < c.len && plan.condensed {
-                    let mut next = v3::<T>(&buf.next[j][k]);
+                    let next = v3::<T>(&buf.next[j][k]);
                     if T::DIRS > 0 {
-                        // local directions of this segment (folded at the next disk)
+                        // this chord's share of B = d(n, m)/dq (folded at the next disk)
                         let pos = plan.pending[g].iter().position(|&(jj, _)| jj == j);
-                        let base = T::DIRS - plan.max_local + 3 * pos.unwrap_or(0);
-                        for a in 0..3 {
-                            next[a].eps_mut()[base + a] = 1.0;
-                        }
+                        let chord = buf.next[j][k] - p.map(|x| x.re());
+                        let l = 3 * plan.pending[g].len();
+                        let (arm_re, t_re) = (arm.map(|x| x.re()), t_next.re());
+                        jump_block(buf, l, pos.unwrap_or(0), chord, arm_re, t_re);
                     }
                     f += unit(next - p).map(|x| x * t_next);
                 } else if k + 1 < c.len {
@@ -531,6 +538,9 @@ fn apply_event<T: Real>(
                 }
                 y.n -= f;
                 y.m -= arm.cross(&f);
+            }
+            if T::DIRS > 0 && plan.condensed && !plan.pending[g].is_empty() {
+                seed_jump(y);
             }
         }
     }
@@ -594,10 +604,11 @@ fn settle_segment<T: Real>(
     // from the last attempt's secant (dg dq: observed change of g over step dq),
     // H <- H - (dq + H dg) dg^T / (dg^T dg), so a stale M or strong coupling near
     // doubling back still converges superlinearly.
+    let h = &mut buf.settle_h[..l * l];
     if ck.iterations == 0 {
         for r in 0..l {
             for c in 0..l {
-                ck.h[r * l + c] = if buf.mlin_valid {
+                h[r * l + c] = if buf.mlin_valid {
                     buf.mlin[ck.g][r * l + c]
                 } else if r == c {
                     1.0
@@ -610,14 +621,14 @@ fn settle_segment<T: Real>(
         let mut dg = [0.0; 3 * super::plan::MAX_CONDENSED_CABLES];
         let mut dd = 0.0;
         for r in 0..l {
-            dg[r] = err[r] - ck.prev_err[r];
+            dg[r] = err[r] - buf.prev_err[r];
             dd += dg[r] * dg[r];
         }
         if dd > 0.0 {
             for r in 0..l {
-                let hdg: f64 = (0..l).map(|c| ck.h[r * l + c] * dg[c]).sum();
-                let u = (ck.prev_step[r] + hdg) / dd;
-                for (hc, dgc) in ck.h[r * l..(r + 1) * l].iter_mut().zip(&dg[..l]) {
+                let hdg: f64 = (0..l).map(|c| h[r * l + c] * dg[c]).sum();
+                let u = (buf.prev_step[r] + hdg) / dd;
+                for (hc, dgc) in h[r * l..(r + 1) * l].iter_mut().zip(&dg[..l]) {
                     *hc -= u * dgc;
                 }
             }
@@ -626,9 +637,9 @@ fn settle_segment<T: Real>(
     for (i, &(j, k)) in pend.iter().enumerate() {
         for a in 0..3 {
             let r = 3 * i + a;
-            let step: f64 = (0..l).map(|c| ck.h[r * l + c] * err[c]).sum();
-            ck.prev_step[r] = step;
-            ck.prev_err[r] = err[r];
+            let step: f64 = (0..l).map(|c| h[r * l + c] * err[c]).sum();
+            buf.prev_step[r] = step;
+            buf.prev_err[r] = err[r];
             buf.next[j][k][a] += step;
         }
     }
@@ -636,45 +647,104 @@ fn settle_segment<T: Real>(
     false
 }
 
+/// Dual pass at guide `g`: `B = d(n, m)/dq` of the chord of pending cable number
+/// `pos` towards its assumed next hole `q` (columns `3 pos..3 pos + 3` of the
+/// `6 x L` matrix), at the point's real values. The chord force is
+/// `F = t u`, `u = (q - p)/|q - p|`, so `dF/dq = t (I - u u^T)/|q - p|`; the jump is
+/// `(dn, dm) = -(F, arm x F)`.
+fn jump_block<T: Real>(
+    buf: &mut PassBuf<T>,
+    l: usize,
+    pos: usize,
+    chord: Vector3<f64>,
+    arm: Vector3<f64>,
+    t: f64,
+) {
+    let len = chord.norm();
+    if len <= 0.0 {
+        return;
+    }
+    let u = chord / len;
+    let d = (Matrix3::identity() - u * u.transpose()) * (t / len);
+    let md = arm.cross_matrix() * d;
+    for r in 0..3 {
+        for c in 0..3 {
+            buf.jump_b[r * l + 3 * pos + c] = -d[(r, c)];
+            buf.jump_b[(r + 3) * l + 3 * pos + c] = -md[(r, c)];
+        }
+    }
+}
+
+/// Dual pass after the chords at a guide with pending cables: seed the local
+/// directions on the jump of `(n, m)` (they are zero here: folded at this disk).
+fn seed_jump<T: Real>(y: &mut State<T>) {
+    let base = T::DIRS - JUMP_DIRS;
+    for a in 0..3 {
+        y.n[a].eps_mut()[base + a] = 1.0;
+        y.m[a].eps_mut()[base + 3 + a] = 1.0;
+    }
+}
+
 /// Dual pass at the disk after `g`: with `a = dp/dz` (outer directions) and
-/// `A = dp/dq` (the segment's local directions) read off the computed holes, the
-/// consistent `dq/dz = (I - A)^-1 a` is folded into the state, which then carries
-/// exact outer derivatives only. Also stores `M = (I - A)^-1` for `f64` passes.
+/// `C = dp/dj` (the jump's local directions) read off the computed holes and `B` from
+/// guide `g`, fold `dj/dz = (I - B C)^-1 B a` into the outer directions, so the state
+/// carries exact outer derivatives only. Also stores `M = I + C (I - B C)^-1 B` for
+/// `f64` passes.
 fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut State<T>, g: usize) {
     let pend = &plan.pending[g];
     let l = 3 * pend.len();
-    let nout = T::DIRS - plan.max_local;
+    let nout = T::DIRS - JUMP_DIRS;
     let w = nout + l;
-    let (mat, rhs) = buf.lin.split_at_mut(plan.max_local * plan.max_local);
-    // (I - A) into mat (l x l), [a | I] into rhs (l x w)
+    let (s, rest) = buf.lin.split_at_mut(36);
+    let (rhs, cmat) = rest.split_at_mut(JUMP_DIRS * (T::DIRS + plan.max_pending_dirs));
+    let rhs = &mut rhs[..JUMP_DIRS * w];
+    // s = I - B C (6 x 6); rhs = [B a | B] (6 x w); cmat = C (l x 6)
+    s.fill(0.0);
+    rhs.fill(0.0);
+    for r in 0..JUMP_DIRS {
+        s[r * 7] = 1.0;
+        rhs[r * w + nout..(r + 1) * w].copy_from_slice(&buf.jump_b[r * l..(r + 1) * l]);
+    }
     for (i, &(j, k)) in pend.iter().enumerate() {
         let p = next_hole(plan, y, j, k);
         for a in 0..3 {
-            let r = 3 * i + a;
+            let q = 3 * i + a;
             let e = p[a].eps();
-            for c in 0..l {
-                mat[r * l + c] = if r == c { 1.0 } else { 0.0 } - e[nout + c];
-                rhs[r * w + nout + c] = if r == c { 1.0 } else { 0.0 };
+            cmat[q * JUMP_DIRS..(q + 1) * JUMP_DIRS].copy_from_slice(&e[nout..]);
+            for r in 0..JUMP_DIRS {
+                let b = buf.jump_b[r * l + q];
+                if b != 0.0 {
+                    for (o, eo) in e[..nout].iter().enumerate() {
+                        rhs[r * w + o] += b * eo;
+                    }
+                    for (c, ec) in e[nout..].iter().enumerate() {
+                        s[r * JUMP_DIRS + c] -= b * ec;
+                    }
+                }
             }
-            rhs[r * w..r * w + nout].copy_from_slice(&e[..nout]);
         }
     }
-    if !solve_small(&mut mat[..l * l], l, &mut rhs[..l * w], w) {
-        // singular segment map: leave the local parts unfolded (the Jacobian is then
-        // inexact, which the outer Newton's line search tolerates) and drop M
-        buf.mlin_valid = false;
-        return;
+    let solved = solve_small(s, JUMP_DIRS, rhs, w);
+    if solved {
+        // M = I + C K with K = (I - B C)^-1 B (the last l columns of rhs)
+        let m = &mut buf.mlin[g];
+        for r in 0..l {
+            for c in 0..l {
+                let ck: f64 = (0..JUMP_DIRS)
+                    .map(|t| cmat[r * JUMP_DIRS + t] * rhs[t * w + nout + c])
+                    .sum();
+                m[r * l + c] = if r == c { 1.0 } else { 0.0 } + ck;
+            }
+        }
     }
-    let m = &mut buf.mlin[g];
-    for r in 0..l {
-        m[r * l..(r + 1) * l].copy_from_slice(&rhs[r * w + nout..(r + 1) * w]);
-    }
-    buf.mlin_valid = true;
+    // a singular segment map leaves the Jacobian inexact (the outer Newton's line
+    // search tolerates that) and drops M
+    buf.mlin_valid = solved;
     let fold = |z: &mut T| {
         let e = z.eps_mut();
-        for c in 0..l {
+        for c in 0..JUMP_DIRS {
             let lc = e[nout + c];
-            if lc != 0.0 {
+            if lc != 0.0 && solved {
                 for o in 0..nout {
                     e[o] += lc * rhs[c * w + o];
                 }

@@ -126,14 +126,22 @@ pub(crate) struct Plan {
     /// (route position + 1, on the next guide) the chord at this guide points to.
     /// Filled only when `condensed`.
     pub pending: Vec<Vec<(usize, usize)>>,
-    /// Largest `3 * pending[g].len()`: the local dual directions a sweep carries.
+    /// Local dual directions a sweep carries: [`JUMP_DIRS`] when `condensed`, else 0.
     pub max_local: usize,
+    /// Largest `3 * pending[g].len()`: the size of a segment's local iteration.
+    pub max_pending_dirs: usize,
 }
 
-/// Tensioned cables through one disk that the condensed coupling handles (3 local
-/// dual directions each; sweeps are compiled for up to 27 local directions, enough
-/// for a three-segment robot with three tendons per segment).
-pub(crate) const MAX_CONDENSED_CABLES: usize = 9;
+/// Tensioned cables through one disk that the condensed coupling handles. A dual
+/// pass carries [`JUMP_DIRS`] local directions whatever the count, so the limit is
+/// only the size (`3 x` this, squared) of the per-segment matrices of the `f64`
+/// local iteration; 16 covers five segments of three tendons and four of four.
+pub(crate) const MAX_CONDENSED_CABLES: usize = 16;
+
+/// Local dual directions of the condensed coupling: the jump of `(n, m)` at a disk.
+/// The next-hole positions `q` (3 per pending cable) enter the pass only through
+/// that jump, so `dq/dz` follows from a 6 x 6 solve (see `statics::pass`).
+pub(crate) const JUMP_DIRS: usize = 6;
 
 impl Plan {
     pub fn new(
@@ -289,7 +297,8 @@ impl Plan {
         if !condensed {
             pending.iter_mut().for_each(Vec::clear);
         }
-        let max_local = if condensed { 3 * max_pending } else { 0 };
+        let max_local = if condensed { JUMP_DIRS } else { 0 };
+        let max_pending_dirs = if condensed { 3 * max_pending } else { 0 };
         for (j, c) in robot.cables().iter().enumerate() {
             for (k, &g) in c.route.iter().enumerate() {
                 guide_cables[g].push((j, k));
@@ -341,6 +350,7 @@ impl Plan {
             condensed,
             pending,
             max_local,
+            max_pending_dirs,
         };
         plan.points = loads
             .point

@@ -6,34 +6,13 @@ use super::intensity::load_intensity;
 use super::pass::{pass, PassBuf, Recording, LOCAL_TOL};
 use super::plan::{ParamSite, Plan};
 use super::{GuidePose, Solution, SolveReport, SolveStatus};
-use crate::cables::{path_length, path_length_t, segments, CableLength};
+use crate::cables::{path_length, segments, CableLength};
 use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::math::{DenseLu, Dual};
 use crate::robot::Robot;
 use crate::settings::SolverSettings;
 use nalgebra::Vector3;
-
-/// Run `$body` with `$b` bound to the wide buffer, or give `$none` without one.
-macro_rules! with_wide {
-    ($w:expr, $b:ident => $body:expr) => {
-        with_wide!($w, $b => { $body; }, ())
-    };
-    ($w:expr, $b:ident => $body:expr, $none:expr) => {
-        match $w {
-            Wide::None => $none,
-            Wide::W9($b) => $body,
-            Wide::W12($b) => $body,
-            Wide::W15($b) => $body,
-            Wide::W18($b) => $body,
-            Wide::W21($b) => $body,
-            Wide::W24($b) => $body,
-            Wide::W27($b) => $body,
-            Wide::W30($b) => $body,
-            Wide::W33($b) => $body,
-        }
-    };
-}
 
 /// Newton iterations a cold start gets before continuation takes over.
 const COLD_BUDGET: usize = 4;
@@ -76,6 +55,11 @@ pub(super) mod joint;
 // Tendon mechanics: hole positions and per-chord tension factors.
 #[path = "chords.rs"]
 mod chords;
+
+// Dual-number sweeps: the Jacobian passes and the condensed coupling's buffers.
+#[path = "sweep.rs"]
+mod sweep;
+use sweep::{sweep, Wide};
 
 /// Where Newton starts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,7 +114,7 @@ pub struct Workspace {
     b3: PassBuf<Dual<3>>,
     b6: PassBuf<Dual<6>>,
     /// Condensed coupling: the sweep buffer with the plan's local directions.
-    wide: Wide,
+    wide: Option<Wide>,
     /// Load scale and outcome of the last `f64` pass (its unknowns are `b64.x`).
     last_pass: Option<f64>,
     has_solution: bool,
@@ -269,10 +253,16 @@ impl Workspace {
     /// Set the load parameters `theta` (units per [`ParamSite`]); no allocation.
     pub fn set_theta(&mut self, theta: &[f64]) {
         for (k, v) in theta.iter().enumerate().take(self.plan.params.len()) {
+            if self.b64.theta[k] != *v {
+                // the last pass (and its settled next holes) belongs to the old value
+                self.last_pass = None;
+            }
             self.b64.theta[k] = *v;
             self.b3.theta[k] = Dual::constant(*v);
             self.b6.theta[k] = Dual::constant(*v);
-            with_wide!(&mut self.wide, b => b.theta[k] = Dual::constant(*v));
+            if let Some(w) = self.wide.as_mut() {
+                w.set_theta(k, *v);
+            }
         }
     }
 
@@ -578,7 +568,7 @@ impl Workspace {
         self.b64.rhs_evals
             + self.b3.rhs_evals
             + self.b6.rhs_evals
-            + with_wide!(&self.wide, b => b.rhs_evals, 0)
+            + self.wide.as_ref().map_or(0, Wide::rhs_evals)
     }
 
     /// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer
@@ -597,7 +587,9 @@ impl Workspace {
         } else {
             (self.lu.matrix_mut(), &mut [][..])
         };
-        with_wide!(&mut self.wide, b => wide_sweeps(plan, x, w, with_theta, b, b64, jac_s, jac_m, lam), false)
+        self.wide
+            .as_mut()
+            .is_some_and(|b| b.sweeps(plan, x, w, with_theta, b64, jac_s, jac_m, lam))
     }
 
     /// Straight-rod reactions as the starting point, loads scaled by `lam`.
@@ -1035,14 +1027,13 @@ impl Workspace {
                 self.eval_at(false, 1.0);
             }
             let (plan, x, b64) = (&self.plan, &self.x, &self.b64);
-            return with_wide!(&mut self.wide, b => {
-                b.next.clone_from(&b64.next);
-                b.watch = true;
-                b.conjugate_at = None;
-                let ok = sweep(plan, x, 0, false, b, jac_s, &mut [], 1.0);
-                b.watch = false;
-                if ok { b.conjugate_at } else { None }
-            }, None);
+            let b = &mut self.wide.as_mut()?.narrow;
+            b.next.clone_from(&b64.next);
+            b.watch = true;
+            b.conjugate_at = None;
+            let ok = sweep(plan, x, 0, false, b, jac_s, &mut [], 1.0);
+            b.watch = false;
+            return if ok { b.conjugate_at } else { None };
         }
         if n == 3 {
             self.b3.watch = true;
@@ -1064,6 +1055,12 @@ impl Workspace {
     /// Current scaled shooting unknowns (layout in the `statics` module docs).
     pub fn unknowns_vector(&self) -> &[f64] {
         &self.x
+    }
+
+    /// Scaled shooting residual at the current unknowns (after a solve or
+    /// [`Workspace::adopt_unknowns`]); its max-norm is `report().residual`.
+    pub fn residual_vector(&self) -> &[f64] {
+        &self.res
     }
 
     /// Scaled shooting residual at scaled unknowns `x` into `out` (diagnostics and
@@ -1154,88 +1151,6 @@ impl Workspace {
     }
 }
 
-/// One dual-number pass seeded along directions `c0..c0+N` of `[x; theta]` (theta only
-/// when `with_theta`); writes d(residual) into `jac_s` (`n x w`) and, when `jac_m`
-/// is non-empty, d(cable length) into `jac_m` (`c x w`), `w = n (+ p)`.
-// Plain data in, two output matrices: a struct for the arguments would add nothing.
-#[allow(clippy::too_many_arguments)]
-fn sweep<const N: usize>(
-    plan: &Plan,
-    x: &[f64],
-    c0: usize,
-    with_theta: bool,
-    buf: &mut PassBuf<Dual<N>>,
-    jac_s: &mut [f64],
-    jac_m: &mut [f64],
-    lam: f64,
-) -> bool {
-    let n = x.len();
-    let p = if with_theta { buf.theta.len() } else { 0 };
-    let w = n + p;
-    // the last `plan.max_local` directions are the condensed coupling's local ones
-    let nout = N - plan.max_local;
-    let seed = |i: usize, v: f64| {
-        if i >= c0 && i < c0 + nout {
-            Dual::variable(v, i - c0)
-        } else {
-            Dual::constant(v)
-        }
-    };
-    for (i, (xi, bi)) in x.iter().zip(buf.x.iter_mut()).enumerate() {
-        *bi = seed(i, *xi);
-    }
-    for k in 0..p {
-        buf.theta[k] = seed(n + k, buf.theta[k].v);
-    }
-    if pass(plan, buf, lam, None).is_err() {
-        return false;
-    }
-    let width = nout.min(w - c0);
-    for r in 0..n {
-        for k in 0..width {
-            jac_s[r * w + c0 + k] = buf.res[r].d[k];
-        }
-    }
-    if !jac_m.is_empty() {
-        for (j, c) in plan.cables.iter().enumerate() {
-            let l = path_length_t(&c.base_hole.map(Dual::constant), &buf.holes[j]);
-            for k in 0..width {
-                jac_m[j * w + c0 + k] = l.d[k];
-            }
-        }
-    }
-    true
-}
-
-/// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer directions
-/// from the next-hole positions `b64` settled at `x`; hands the segments' matrices `M`
-/// back to `b64` and returns the seeded `theta` to constants. `false` if a pass failed.
-#[allow(clippy::too_many_arguments)]
-fn wide_sweeps<const N: usize>(
-    plan: &Plan,
-    x: &[f64],
-    w: usize,
-    with_theta: bool,
-    b: &mut PassBuf<Dual<N>>,
-    b64: &mut PassBuf<f64>,
-    jac_s: &mut [f64],
-    jac_m: &mut [f64],
-    lam: f64,
-) -> bool {
-    b.next.clone_from(&b64.next);
-    let ok = (0..w)
-        .step_by(6)
-        .all(|c0| sweep(plan, x, c0, with_theta, b, jac_s, jac_m, lam));
-    for (t, v) in b.theta.iter_mut().zip(&b64.theta) {
-        *t = Dual::constant(*v);
-    }
-    if ok && b.mlin_valid {
-        b64.mlin.clone_from(&b.mlin);
-        b64.mlin_valid = true;
-    }
-    ok
-}
-
 /// The status of a solve (or of a Newton run inside one) that stops at a state with
 /// max-norm scaled residual `residual`; `stop` is why the iteration stopped. Every
 /// status of this file is decided here, so it is a function of the state handed back:
@@ -1270,39 +1185,4 @@ fn max_abs(v: &[f64]) -> f64 {
 
 fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-/// Sweep buffer of the condensed coupling: six outer directions plus the plan's
-/// `max_local` local ones (3 per tensioned cable through a disk, at most 27: a
-/// three-segment robot with three tendons per segment has nine through its first disks).
-enum Wide {
-    None,
-    W9(PassBuf<Dual<9>>),
-    W12(PassBuf<Dual<12>>),
-    W15(PassBuf<Dual<15>>),
-    W18(PassBuf<Dual<18>>),
-    W21(PassBuf<Dual<21>>),
-    W24(PassBuf<Dual<24>>),
-    W27(PassBuf<Dual<27>>),
-    W30(PassBuf<Dual<30>>),
-    W33(PassBuf<Dual<33>>),
-}
-
-impl Wide {
-    fn new(plan: &Plan) -> Self {
-        if !plan.condensed {
-            return Self::None;
-        }
-        match plan.max_local {
-            3 => Self::W9(PassBuf::new(plan)),
-            6 => Self::W12(PassBuf::new(plan)),
-            9 => Self::W15(PassBuf::new(plan)),
-            12 => Self::W18(PassBuf::new(plan)),
-            15 => Self::W21(PassBuf::new(plan)),
-            18 => Self::W24(PassBuf::new(plan)),
-            21 => Self::W27(PassBuf::new(plan)),
-            24 => Self::W30(PassBuf::new(plan)),
-            _ => Self::W33(PassBuf::new(plan)),
-        }
-    }
 }

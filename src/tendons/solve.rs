@@ -36,6 +36,9 @@ use crate::statics::{ParamSite, SolveStatus, Start, Workspace};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+// The warm fast path: Newton on the shooting unknowns and tensions together.
+mod joint;
+
 /// Settings of the tendon iteration (the shooting solve inside has its own).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -45,6 +48,10 @@ pub struct TendonSettings {
     /// Tolerance on `max_i |G_i|` (m), the mismatch between each taut tendon's path
     /// and the length it covers at its tension (default 1e-12 m).
     pub tolerance_m: f64,
+    /// Warm solves first try Newton on the shooting unknowns and the tensions
+    /// together (`joint` submodule), handing back to the nested method when it does
+    /// not converge (default true; false runs the nested method only).
+    pub joint_newton: bool,
 }
 
 impl Default for TendonSettings {
@@ -52,6 +59,7 @@ impl Default for TendonSettings {
         Self {
             max_iterations: 30,
             tolerance_m: 1e-12,
+            joint_newton: true,
         }
     }
 }
@@ -115,6 +123,7 @@ pub struct TendonWorkspace {
     has_solution: bool,
     settings: TendonSettings,
     report: TendonReport,
+    joint: joint::JointBufs,
 }
 
 impl TendonWorkspace {
@@ -193,7 +202,9 @@ impl TendonWorkspace {
         let ws = Workspace::with_params(robot, loads, settings, &params)?;
         let p = driven.len();
         let np = params.len();
+        let joint = joint::JointBufs::new(ws.unknowns(), p, np, nc);
         let mut me = Self {
+            joint,
             ws,
             columns,
             free0: vec![0.0; p],
@@ -393,6 +404,15 @@ impl TendonWorkspace {
             forward_solves: 0,
             slack: 0,
         };
+        // the warm fast path (mu = 0, or friction factors that stay put)
+        if start == Start::Warm
+            && self.settings.joint_newton
+            && self.solve_joint()
+            && self.refresh_factors()
+        {
+            return Ok(self.finish());
+        }
+        self.report.status = SolveStatus::MaxIterations;
         // the point T: shooting solve, factors, lengths, sensitivities, residual
         if !self.evaluate(start, true) {
             start = Start::Cold;
@@ -525,7 +545,13 @@ impl TendonWorkspace {
             self.ws.cable_lengths_into(&mut self.lengths);
             self.sens_fresh = false;
         }
-        for i in 0..p {
+        self.update_g();
+        true
+    }
+
+    /// `G` and the taut flags from `t` and `lengths` (module docs).
+    fn update_g(&mut self) {
+        for i in 0..self.driven.len() {
             let j = self.driven[i];
             let m = &self.mech[i];
             let covered = m.covered(self.free[i], self.t[i], self.mean_factor[i]);
@@ -536,7 +562,6 @@ impl TendonWorkspace {
             self.taut[i] = stretch_gap <= slack_arm && (self.t[i] > 0.0 || stretch_gap < 0.0);
             self.g[i] = stretch_gap.min(slack_arm);
         }
-        true
     }
 
     /// Set the tension of every slack-branch tendon to 0; `true` if any was not.

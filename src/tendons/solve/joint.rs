@@ -1,0 +1,271 @@
+//! The warm fast path of a solve from readings: one semi-smooth Newton iteration
+//! on the shooting unknowns and the tensions together.
+//!
+//! Unknowns `z = [x; T]` (the scaled shooting unknowns of the inner [`Workspace`]
+//! and the tensions of the driven tendons), residuals `F = [r(x, T); G(x, T)]`: the
+//! scaled boundary residual of the shooting problem and the tendon NCP function of
+//! the parent module, `G_i = min(a_i T_i, c_i T_i + L_f,i - l_i(x, T))`. The
+//! generalized Jacobian is exact, from one dual sweep over `[x; T]`
+//! ([`Workspace::joint_jacobians`]):
+//!
+//! ```text
+//! [ R_x              R_T                ]   boundary rows
+//! [ -dl_i/dx         c_i e_i - dl_i/dT  ]   taut tendon i
+//! [ 0                a_i e_i            ]   slack tendon i
+//! ```
+//!
+//! The nested method (a converged shooting solve per tension iterate, then a sweep
+//! for `dl/dT`) pays a full warm shooting solve for every tension trial; this one
+//! pays one `f64` pass and one sweep per iteration. Why it is only the warm path:
+//! from the previous row it starts within Newton's reach; a cold start needs the
+//! shooting solve's continuation and branch checks, which the nested method keeps.
+//! It hands back to the nested method (from the row's starting point) whenever it
+//! does not converge within [`JOINT_MAX_ITERATIONS`] or a step fails, so it can
+//! only make a row faster, never change which rows converge. The shooting solve's
+//! warm branch guard (a check that Newton went where its tangent pointed) is not
+//! run on this path: steps are limited to [`MAX_STEP`] in the scaled unknowns, and
+//! a larger step hands back to the nested method.
+
+use super::TendonWorkspace;
+use crate::math::DenseLu;
+use crate::statics::SolveStatus;
+
+/// Newton iterations of the joint path before it hands back.
+pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
+/// Largest accepted step of the scaled shooting unknowns (forces in units of
+/// `EI/L^2`, moments of `EI/L`): a larger one leaves the neighbourhood the warm
+/// start vouches for. On the FTDCR v4 recording consecutive rows step up to ~10
+/// (base force ~0.8 N against `EI/L^2` ~0.085 N).
+const MAX_STEP: f64 = 100.0;
+/// A reused (chord) Jacobian's step must shrink the merit by this factor.
+const CHORD_CONTRACTION: f64 = 0.1;
+
+/// Buffers of the joint path, sized once.
+pub(super) struct JointBufs {
+    /// Shooting unknowns and tensions at the row's start, at the current iterate,
+    /// and the trial.
+    x0: Vec<f64>,
+    t0: Vec<f64>,
+    xs: Vec<f64>,
+    ts: Vec<f64>,
+    x: Vec<f64>,
+    /// `d r / d[x; theta]` (`n x (n + np)`) and `d l / d[x; theta]` (`c x (n + np)`).
+    jac_s: Vec<f64>,
+    jac_m: Vec<f64>,
+    /// Step `[dx; dT]` and the factorised Jacobian.
+    dz: Vec<f64>,
+    lu: DenseLu,
+    /// `lu` holds a factorisation with this active set (chord steps).
+    lu_taut: Vec<bool>,
+    lu_valid: bool,
+    /// `|| [r / tol; G / tol_G] ||_2` at the last evaluation (line-search merit).
+    l2: f64,
+}
+
+impl JointBufs {
+    pub(super) fn new(n: usize, p: usize, np: usize, cables: usize) -> Self {
+        Self {
+            x0: vec![0.0; n],
+            t0: vec![0.0; p],
+            xs: vec![0.0; n],
+            ts: vec![0.0; p],
+            x: vec![0.0; n],
+            jac_s: vec![0.0; n * (n + np)],
+            jac_m: vec![0.0; cables * (n + np)],
+            dz: vec![0.0; n + p],
+            lu: DenseLu::new(n + p),
+            lu_taut: vec![true; p],
+            lu_valid: false,
+            l2: f64::INFINITY,
+        }
+    }
+}
+
+impl TendonWorkspace {
+    /// The joint Newton from the current (warm) point. `true` when it converged
+    /// (the workspace then holds the row's solution); `false` when it handed back,
+    /// with the row's starting point restored.
+    pub(super) fn solve_joint(&mut self) -> bool {
+        let n = self.ws.unknowns();
+        let p = self.driven.len();
+        self.joint.x0.copy_from_slice(self.ws.unknowns_vector());
+        self.joint.t0.copy_from_slice(&self.t);
+        self.joint.x.copy_from_slice(&self.joint.x0);
+        let Some(mut merit) = self.joint_evaluate() else {
+            return self.joint_hand_back();
+        };
+        for it in 0..JOINT_MAX_ITERATIONS {
+            self.report.iterations = it;
+            if merit <= 1.0 {
+                if self.zero_slack_tensions() {
+                    // a slack tendon carries exactly nothing (see the nested loop)
+                    match self.joint_evaluate() {
+                        Some(m) if m <= 1.0 => {}
+                        _ => return self.joint_hand_back(),
+                    }
+                }
+                self.report.status = SolveStatus::Converged;
+                return true;
+            }
+            // a chord step with the last factorisation when the active set is the
+            // same; a fresh Jacobian when there is none or the chord step does not
+            // contract the merit by CHORD_CONTRACTION
+            let chord = self.joint.lu_valid && self.joint.lu_taut == self.taut;
+            let l2_before = self.joint.l2;
+            self.joint.xs.copy_from_slice(&self.joint.x);
+            self.joint.ts.copy_from_slice(&self.t);
+            let mut accepted = None;
+            for fresh in [false, true] {
+                if !fresh && !chord {
+                    continue;
+                }
+                if fresh && chord {
+                    // back from the failed chord trial to the iterate
+                    self.joint.x.copy_from_slice(&self.joint.xs);
+                    self.t.copy_from_slice(&self.joint.ts);
+                    if self.joint_evaluate().is_none() {
+                        return self.joint_hand_back();
+                    }
+                }
+                if fresh && !self.joint_factor() {
+                    return self.joint_hand_back();
+                }
+                self.joint_step(n, p);
+                let dx_max = self.joint.dz[..n]
+                    .iter()
+                    .fold(0.0f64, |m, d| m.max(d.abs()));
+                if !dx_max.is_finite() || dx_max > MAX_STEP {
+                    if fresh {
+                        return self.joint_hand_back();
+                    }
+                    continue;
+                }
+                let mut alpha = 1.0;
+                for _ in 0..if fresh { 8 } else { 1 } {
+                    for i in 0..n {
+                        self.joint.x[i] = self.joint.xs[i] + alpha * self.joint.dz[i];
+                    }
+                    for i in 0..p {
+                        self.t[i] = (self.joint.ts[i] + alpha * self.joint.dz[n + i]).max(0.0);
+                    }
+                    if let Some(m) = self.joint_evaluate() {
+                        let enough = if fresh {
+                            (1.0 - 1e-4 * alpha) * l2_before
+                        } else {
+                            CHORD_CONTRACTION * l2_before
+                        };
+                        if self.joint.l2 < enough || m <= 1.0 {
+                            accepted = Some(m);
+                            break;
+                        }
+                    }
+                    alpha *= 0.5;
+                }
+                if accepted.is_some() {
+                    break;
+                }
+                self.joint.lu_valid = false;
+            }
+            match accepted {
+                Some(m) => merit = m,
+                None => return self.joint_hand_back(),
+            }
+        }
+        self.joint_hand_back()
+    }
+
+    /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
+    /// `max(|r|/tol, |G|/tol_G)` (converged at <= 1), `None` if the pass failed.
+    fn joint_evaluate(&mut self) -> Option<f64> {
+        let p = self.driven.len();
+        self.theta[..p].copy_from_slice(&self.t);
+        self.ws.set_theta(&self.theta);
+        self.report.forward_solves += 1;
+        let res = self.ws.adopt_unknowns(&self.joint.x, true);
+        if !res.is_finite() {
+            return None;
+        }
+        self.ws.cable_lengths_into(&mut self.lengths);
+        self.update_g();
+        let tol = self.ws.report().tolerance;
+        let tol_g = self.settings.tolerance_m;
+        let r2: f64 = self
+            .ws
+            .residual_vector()
+            .iter()
+            .map(|r| (r / tol).powi(2))
+            .sum();
+        let g2: f64 = self.g.iter().map(|g| (g / tol_g).powi(2)).sum();
+        self.joint.l2 = (r2 + g2).sqrt();
+        Some((res / tol).max(self.merit() / tol_g))
+    }
+
+    /// Exact generalized Jacobian at the current point, factorised.
+    fn joint_factor(&mut self) -> bool {
+        let n = self.ws.unknowns();
+        let p = self.driven.len();
+        let np = self.theta.len();
+        let w = n + np;
+        let jb = &mut self.joint;
+        if !self.ws.joint_jacobians(&jb.x, &mut jb.jac_s, &mut jb.jac_m) {
+            jb.lu_valid = false;
+            return false;
+        }
+        let m = n + p;
+        let a = jb.lu.matrix_mut();
+        for r in 0..n {
+            a[r * m..r * m + n].copy_from_slice(&jb.jac_s[r * w..r * w + n]);
+            a[r * m + n..(r + 1) * m].copy_from_slice(&jb.jac_s[r * w + n..r * w + n + p]);
+        }
+        for i in 0..p {
+            let row = &mut a[(n + i) * m..(n + i + 1) * m];
+            let mech = &self.mech[i];
+            let c = mech.compliance(self.free[i], self.mean_factor[i]);
+            if self.taut[i] {
+                let j = self.driven[i];
+                for (col, v) in row[..n].iter_mut().enumerate() {
+                    *v = -jb.jac_m[j * w + col];
+                }
+                for k in 0..p {
+                    row[n + k] = -jb.jac_m[j * w + n + k] + if k == i { c } else { 0.0 };
+                }
+            } else {
+                row.fill(0.0);
+                row[n + i] = c + self.geo[i];
+            }
+        }
+        jb.lu_valid = matches!(jb.lu.factor(), Some(rc) if rc > 1e-14);
+        jb.lu_taut.copy_from_slice(&self.taut);
+        jb.lu_valid
+    }
+
+    /// `dz = -J^-1 [r; G]` with the factorised Jacobian; a slack row's step is
+    /// exactly `-T_i` (see the nested method's `exact_slack_steps`).
+    fn joint_step(&mut self, n: usize, p: usize) {
+        let jb = &mut self.joint;
+        for (d, r) in jb.dz[..n].iter_mut().zip(self.ws.residual_vector()) {
+            *d = -r;
+        }
+        for i in 0..p {
+            jb.dz[n + i] = -self.g[i];
+        }
+        jb.lu.solve_in_place(&mut jb.dz);
+        for i in 0..p {
+            if !jb.lu_taut[i] {
+                jb.dz[n + i] = -self.t[i];
+            }
+        }
+    }
+
+    /// Restore the row's starting point for the nested method; `false`.
+    fn joint_hand_back(&mut self) -> bool {
+        self.t.copy_from_slice(&self.joint.t0);
+        self.joint.x.copy_from_slice(&self.joint.x0);
+        self.joint.lu_valid = false;
+        if self.joint_evaluate().is_none() {
+            // the start was a converged row: only a non-finite theta could fail it
+            self.has_solution = false;
+        }
+        false
+    }
+}
