@@ -6,12 +6,13 @@
 
 use crate::Scene;
 use cablesense::calibrate::{
-    calibrate as core_calibrate, calibrated_scene, CalibrationError as CoreError,
+    calibrate as core_calibrate, calibrated_scene, CalibrationError as CoreError, CalibrationModel,
     CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup, ParamSpec,
-    ReadingsModel, Recording, RigidTransform, SceneModel,
+    ReadingsModel, Recording, RigidTransform, SceneModel, TipErrors,
 };
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::ParamPath;
+use numpy::PyArrayMethods;
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -167,6 +168,65 @@ pub fn calibrate<'py>(
         .call_method1("loads", (json,))?
         .cast_into()?;
     d.set_item("scene", Scene { inner: out_scene })?;
+    Ok(d)
+}
+
+/// Predict every row of `recording` with a (calibrated) scene and compare with its
+/// marker columns: the scene's `[calibration]` gives the columns, the capture frame,
+/// the marker offset and body; the model is the one the scene calls for (servo
+/// readings or tensions), warm-started row to row. This is the hardware validation:
+/// `data/calibration/ftdcr_v4_calibrated.toml` on `data/hardware/ftdcr_v4/val.csv`
+/// (443 rows, several seconds). Returns {lines (n,), predicted_m (n, 3) and
+/// measured_m (n, 3) in the robot base frame, errors {raw, mean_removed} with
+/// rmse_m, median_m, p95_m, max_m, count}.
+#[pyfunction]
+pub fn predict_recording<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    recording: PathBuf,
+) -> PyResult<Bound<'py, PyDict>> {
+    let scene = &scene.inner;
+    let mut spec = scene.calibration.clone().unwrap_or_default();
+    if spec.inputs.is_empty() {
+        spec.inputs = ReadingsModel::reading_columns(scene);
+    }
+    let out = py.detach(|| {
+        let rec = Recording::load(&recording, &ColumnMap::from_spec(&spec))?;
+        let frame = RigidTransform::from_vector(
+            &Vector3::from(spec.capture_to_base.rotation_vector),
+            &Vector3::from(spec.capture_to_base.translation_m),
+        );
+        let offset = Vector3::from(spec.marker_offset_m);
+        let mut model = SceneModel::new(scene, &[], &rec.input_names, spec.marker_s_m)?;
+        let (mut predicted, mut measured, mut lines) = (Vec::new(), Vec::new(), Vec::new());
+        for row in &rec.rows {
+            let pose = model.predict(row)?;
+            predicted.push(pose.position + pose.rotation * offset);
+            measured.push(frame.apply(&row.marker_m));
+            lines.push(row.line as u64);
+        }
+        let errors = TipErrors::of(&predicted, &measured);
+        let json = serde_json::to_string(&errors).map_err(|e| CoreError::Io {
+            path: "<errors>".into(),
+            why: e.to_string(),
+        })?;
+        Ok::<_, CoreError>((lines, predicted, measured, json))
+    });
+    let (lines, predicted, measured, json) = out.map_err(|e| calibration_err(py, e))?;
+    let n = lines.len();
+    let flat =
+        |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().flat_map(|p| p.iter().copied()).collect() };
+    let d = PyDict::new(py);
+    d.set_item("lines", numpy::PyArray1::from_vec(py, lines))?;
+    d.set_item(
+        "predicted_m",
+        numpy::PyArray1::from_vec(py, flat(&predicted)).reshape([n, 3])?,
+    )?;
+    d.set_item(
+        "measured_m",
+        numpy::PyArray1::from_vec(py, flat(&measured)).reshape([n, 3])?,
+    )?;
+    d.set_item("errors", py.import("json")?.call_method1("loads", (json,))?)?;
     Ok(d)
 }
 

@@ -1,10 +1,12 @@
 //! Python module `cablesense` (extension `cablesense._cablesense`): scenes, forward
 //! solves with numpy arrays, a warm-started solver, the estimator, solves from tendon
-//! readings (`tendons.rs`) and calibration from a recording (`calibrate.rs`). Only
+//! readings (`tendons.rs`), calibration from a recording (`calibrate.rs`) and the
+//! thesis validation (`validation.rs`). Only
 //! translates types and errors; the GIL is released inside every solve and tick.
 
 mod calibrate;
 mod tendons;
+mod validation;
 
 use cablesense::estimate::{Estimate, Estimator};
 use cablesense::{ModelError, Scene as CoreScene, Solution, Start, Workspace};
@@ -433,6 +435,8 @@ fn _cablesense(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<tendons::TendonSolver>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(validation::validate_thesis, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::predict_recording, m)?)?;
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     m.add("ReadingsError", m.py().get_type::<ReadingsError>())?;
     m.add(

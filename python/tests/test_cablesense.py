@@ -216,6 +216,15 @@ def test_calibration_of_the_demo_recovers_the_moduli():
     again = cablesense.calibrate(fit["scene"], CAL / "train.csv", max_iterations=2)
     for p in again["params"]:
         assert p["initial"] == pytest.approx(values[p["name"]], rel=1e-12), p
+    # the calibrated scene predicts the validation recording with the errors the
+    # calibration reported for it
+    pred = cablesense.predict_recording(fit["scene"], CAL / "val.csv")
+    n = fit["val"]["raw"]["count"]
+    assert pred["predicted_m"].shape == (n, 3) and pred["measured_m"].shape == (n, 3)
+    for kind in ["raw", "mean_removed"]:
+        assert pred["errors"][kind]["rmse_m"] == pytest.approx(
+            fit["val"][kind]["rmse_m"], rel=1e-6, abs=1e-9
+        ), kind
 
 
 def test_calibration_errors_name_file_line_column(tmp_path):
@@ -233,3 +242,25 @@ def test_calibration_errors_name_file_line_column(tmp_path):
     with pytest.raises(cablesense.CalibrationError) as e:
         cablesense.calibrate(scene, CAL / "train.csv", params=["robot/nope/3"])
     assert "robot/nope/3" in str(e.value)
+
+
+# --- thesis validation -------------------------------------------------------------
+
+
+def test_thesis_table_4_3_matches_the_thesis_model():
+    v = cablesense.validate_thesis("4.3")
+    assert v["table"] == "4.3" and v["all_converged"] and len(v["rows"]) == 6
+    (tip,) = [p for p in v["points"] if p["label"] == "tip"]
+    # the thesis's model and ours agree to well under a millimetre (thesis table 4.3,
+    # the stored fit to its predicted columns), and both miss the observations by
+    # about the printed average error (1.27 % of L_ref)
+    assert tip["rms_ours_thesis_m"] < 5e-4 and tip["max_ours_thesis_m"] < 1e-3, tip
+    assert abs(tip["mean_pct_ours_obs"] - tip["thesis_avg_pct"]) < 0.2, tip
+    row = v["rows"][0]
+    assert row["status"] == "converged" and len(row["points"][0]["ours_m"]) == 2
+    # without the stored fit the model is further from the thesis's
+    raw = cablesense.validate_thesis("4.3", fitted=False)
+    (raw_tip,) = [p for p in raw["points"] if p["label"] == "tip"]
+    assert raw_tip["rms_ours_thesis_m"] != tip["rms_ours_thesis_m"]
+    with pytest.raises(ValueError, match="4.9"):
+        cablesense.validate_thesis("4.9")

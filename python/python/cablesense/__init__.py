@@ -18,6 +18,12 @@ Calibration from a recording (the scene's [calibration] table maps the columns):
 
     fit = cablesense.calibrate(scene, "train.csv", val="val.csv")
     fit["params"], fit["val"]["mean_removed"]["rmse_m"], fit["scene"]
+    # the hardware validation: a calibrated scene predicting a held-out recording
+    cablesense.predict_recording(fit["scene"], "val.csv")["errors"]["mean_removed"]
+
+The thesis validation (data embedded in the library):
+
+    v = cablesense.validate_thesis("4.3")  # rows, per-point and per-cable summaries
 
 Invalid scenes raise SceneError (a ValueError) whose `field` names the offending
 field path, e.g. "robot.sections[0].length_m"; bad readings raise ReadingsError
@@ -34,7 +40,9 @@ from ._cablesense import (
     Solver,
     TendonSolver,
     calibrate,
+    predict_recording,
     solve,
+    validate_thesis,
 )
 
 __all__ = [
@@ -46,5 +54,7 @@ __all__ = [
     "Solver",
     "TendonSolver",
     "calibrate",
+    "predict_recording",
     "solve",
+    "validate_thesis",
 ]

@@ -135,3 +135,12 @@ def calibrate(
 ) -> CalibrationReport:
     """Fit the scene's ``[calibration]`` parameters (plus ``params`` paths), capture
     frame and marker offset to the recording ``train``; predict ``val`` too."""
+
+def validate_thesis(table: str, fitted: bool = True) -> Dict[str, Any]:
+    """Compare the model with a thesis table (4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc):
+    {table, title, ref_length_m, all_converged, rows, points, lengths}."""
+
+def predict_recording(scene: Scene, recording: Union[str, PathLike[str]]) -> Dict[str, Any]:
+    """Predict every row of a recording with a (calibrated) scene, compared with its
+    marker columns in the base frame: {lines, predicted_m (n, 3), measured_m (n, 3),
+    errors {raw, mean_removed}}."""
