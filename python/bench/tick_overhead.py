@@ -9,8 +9,12 @@ they share the machine's load:
 
   rust   : Estimator.time_ticks(samples, n): n ticks timed one by one in Rust
            (`Instant` around `Estimator::tick`, no Python in the loop);
+  rust+snapshot : the same, each tick followed by `Estimator::estimate()` (exact
+           statistics, the shape recomputed for the tip: the work behind the dict);
   python : est.tick(row) timed one by one with time.perf_counter_ns(): argument
-           conversion, the tick, the estimate snapshot and the result dict.
+           conversion, the tick, the estimate snapshot and the result dict;
+  python snapshot=False : est.tick(row, snapshot=False), the control-loop path
+           (status, values, covariance, tip; no snapshot).
 
 Prints medians and p90 of both and the difference of the medians; the log is in
 benches/README.md. Run after `maturin develop --release` (see .ci/run):
@@ -94,11 +98,13 @@ def main():
     # warm-up as the criterion bench: one pass over the samples
     for r in rows:
         est.tick(r)
-    py_us, rs_us = [], []
+    py_us, rs_us, snap_us = [], [], []
     k = 0
     converged = 0
     for _ in range(a.blocks):
         rs_us.extend(1e6 * est.time_ticks(np.roll(rows, -k, axis=0), a.block))
+        k = (k + a.block) % len(rows)
+        snap_us.extend(1e6 * est.time_ticks(np.roll(rows, -k, axis=0), a.block, snapshot=True))
         k = (k + a.block) % len(rows)
         for _ in range(a.block):
             r = rows[k]
@@ -108,11 +114,30 @@ def main():
             converged += out["status"] == "converged"
             k = (k + 1) % len(rows)
     n = a.blocks * a.block
-    print(f"{n} ticks each side, {converged} of the Python ticks converged")
-    for name, xs in [("rust  ", rs_us), ("python", py_us)]:
+    print(f"{n} ticks per series ({len(rs_us)} rust), {converged} of the Python ticks converged")
+    # the control-loop path: tick(row, snapshot=False), same blocks
+    lean_us = []
+    for _ in range(a.blocks):
+        for _ in range(a.block):
+            r = rows[k]
+            t0 = time.perf_counter_ns()
+            est.tick(r, snapshot=False)
+            lean_us.append((time.perf_counter_ns() - t0) * 1e-3)
+            k = (k + 1) % len(rows)
+        rs_us.extend(1e6 * est.time_ticks(np.roll(rows, -k, axis=0), a.block))
+        k = (k + a.block) % len(rows)
+    for name, xs in [
+        ("rust                   ", rs_us),
+        ("rust+snapshot          ", snap_us),
+        ("python tick            ", py_us),
+        ("python snapshot=False  ", lean_us),
+    ]:
         print(f"{name}: median {statistics.median(xs):7.1f} us  p90 {pct(xs, 0.9):7.1f} us")
-    d = statistics.median(py_us) - statistics.median(rs_us)
-    print(f"python - rust, medians: {d:+.1f} us (target <= 20 us)")
+    m = {k: statistics.median(v) for k, v in [("r", rs_us), ("s", snap_us), ("p", py_us)]}
+    print(f"python - rust, medians: {m['p'] - m['r']:+.1f} us (target <= 20 us), of which "
+          f"the snapshot {m['s'] - m['r']:+.1f} us and the binding {m['p'] - m['s']:+.1f} us")
+    lean = statistics.median(lean_us) - m["r"]
+    print(f"python tick(snapshot=False) - rust, medians: {lean:+.1f} us")
     return 0 if converged == n else 1
 
 

@@ -357,13 +357,19 @@ impl PyEstimator {
         self.est.names().to_vec()
     }
     /// One sample: cable length changes (m; NaN = missing) and optional per-cable
-    /// noise (m). Returns the estimate dict.
-    #[pyo3(signature = (changes, sigma = None))]
+    /// noise (m). Returns the estimate dict (the snapshot `Estimator::estimate`:
+    /// exact statistics, fit test, the shape recomputed for the tip). With
+    /// `snapshot=False` only the tick runs and the dict is {status, values,
+    /// covariance (from the sensitivities the tick ended with), statistics_exact,
+    /// tip}: the control-loop path, as the C ABI's tick (the snapshot costs about
+    /// 16 us on the track demo, `python/bench/tick_overhead.py`).
+    #[pyo3(signature = (changes, sigma = None, snapshot = true))]
     fn tick<'py>(
         &mut self,
         py: Python<'py>,
         changes: &Bound<'py, PyAny>,
         sigma: Option<&Bound<'py, PyAny>>,
+        snapshot: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         read_f64s(changes, &mut self.changes, "changes")?;
         if let Some(s) = sigma {
@@ -383,6 +389,22 @@ impl PyEstimator {
         }
         let (est, changes) = (&mut self.est, &self.changes);
         let sigma = sigma.is_some().then_some(&self.sigma[..]);
+        if !snapshot {
+            let status = py.detach(|| est.tick(changes, sigma));
+            let p = est.theta().len();
+            let d = PyDict::new(py);
+            d.set_item("status", to_snake(&format!("{status:?}")))?;
+            d.set_item("values", PyArray1::from_slice(py, est.theta()))?;
+            let cov: Bound<'py, PyArray2<f64>> =
+                PyArray1::from_slice(py, est.covariance()).reshape([p, p])?;
+            d.set_item("covariance", cov)?;
+            d.set_item("statistics_exact", est.statistics_are_exact())?;
+            d.set_item(
+                "tip",
+                PyArray1::from_slice(py, est.tip_position().as_slice()),
+            )?;
+            return Ok(d);
+        }
         let e = py.detach(|| {
             est.tick(changes, sigma);
             est.estimate()
@@ -392,13 +414,18 @@ impl PyEstimator {
 
     /// Time `count` ticks in Rust alone (no Python in the loop), cycling over the
     /// rows of `samples` (n, c), each timed on its own (`Instant`); returns the
-    /// seconds per tick. For measuring the binding's overhead against the same
-    /// estimator in the same process (`python/bench/tick_overhead.py`).
+    /// seconds per tick. With `snapshot=True` each timed tick also takes the
+    /// estimate snapshot that `tick` returns (`Estimator::estimate`: exact
+    /// statistics, the shape recomputed for the tip). For measuring the binding's
+    /// overhead against the same estimator in the same process
+    /// (`python/bench/tick_overhead.py`).
+    #[pyo3(signature = (samples, count, snapshot = false))]
     fn time_ticks<'py>(
         &mut self,
         py: Python<'py>,
         samples: numpy::PyReadonlyArray2<'py, f64>,
         count: usize,
+        snapshot: bool,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let c = self.est.reference_lengths().len();
         let (rows_n, cols) = samples.as_array().dim();
@@ -418,6 +445,9 @@ impl PyEstimator {
                 let row = &rows[i * c..(i + 1) * c];
                 let t0 = std::time::Instant::now();
                 std::hint::black_box(est.tick(std::hint::black_box(row), None));
+                if snapshot {
+                    std::hint::black_box(est.estimate());
+                }
                 t.push(t0.elapsed().as_secs_f64());
             }
             t

@@ -79,6 +79,20 @@ def test_estimator_recovers_the_demo_force():
     assert abs(out["values"][0] + 0.05) < 1e-3 and abs(out["values"][1] - 0.04) < 1e-3
     assert out["covariance"].shape == (2, 2)
     assert np.allclose(np.sqrt(np.diag(out["covariance"])), out["std_dev"])
+    # the control-loop path: the same tick without the snapshot
+    rows = first_rows(3)
+    full = cablesense.Estimator(cablesense.Scene.from_file(TRACK))
+    for r in rows:
+        a, b = full.tick(r), est.tick(r, snapshot=False)
+        assert b["status"] == a["status"] and sorted(b) == [
+            "covariance", "statistics_exact", "status", "tip", "values"
+        ]
+        # the two estimators differ in history (the snapshot refreshes the
+        # sensitivities the next tick reuses): equal within the solver's tolerance,
+        # 1 % of the ~2e-4 N noise std
+        assert np.allclose(b["values"], a["values"], rtol=0, atol=2e-6)
+        assert np.allclose(b["tip"], a["tip"], atol=1e-6)
+        assert b["covariance"].shape == (2, 2)
     # a missing cable and explicit noise
     out = est.tick([math.nan, -2.5e-3, 2.2e-4], sigma=[1e-5, 1e-5, 1e-5])
     assert out["redundancy"] == 0 and out["fit"] == "untestable"

@@ -75,11 +75,17 @@ class Estimator:
         self,
         changes: Union[Sequence[float], npt.NDArray[np.float64]],
         sigma: Optional[Union[Sequence[float], npt.NDArray[np.float64]]] = None,
+        snapshot: bool = True,
     ) -> Estimate:
-        """One sample: cable length changes (m; NaN = missing), optional noise (m)."""
-    def time_ticks(self, samples: npt.NDArray[np.float64], count: int) -> npt.NDArray[np.float64]:
+        """One sample: cable length changes (m; NaN = missing), optional noise (m).
+        ``snapshot=False``: only {status, values, covariance (tick-end sensitivities),
+        statistics_exact, tip}, without the ~16 us estimate snapshot (control loops)."""
+    def time_ticks(
+        self, samples: npt.NDArray[np.float64], count: int, snapshot: bool = False
+    ) -> npt.NDArray[np.float64]:
         """Seconds per tick of ``count`` ticks run in Rust alone over the rows of
-        ``samples`` (n, c), for measuring the binding's overhead."""
+        ``samples`` (n, c) (with ``snapshot``: each plus the estimate snapshot that
+        ``tick`` returns), for measuring the binding's overhead."""
 
 # Tendon row dict (SI units): tip (3,) m; section_tips (k, 3) m; tensions (p,) N of
 #   the displacement-driven tendons; taut (p,) bool; lengths (c,) m of every cable;
