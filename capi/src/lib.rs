@@ -1,11 +1,14 @@
 //! C ABI of `cablesense` for control loops (header: `capi/include/cablesense.h`).
 //!
-//! Two opaque handles, each created from a scene TOML string:
+//! Three opaque handles, each created from a scene TOML string:
 //! * [`CsModel`]: the forward statics of the scene (its loads, its `[numerics]`):
 //!   solve, then read the tip pose, section end poses and cable lengths;
 //! * [`CsEstimator`]: the scene's `[estimate]` problem: one tick per sample of
 //!   cable length changes, then read the estimate, its covariance, the tip position
-//!   and the predicted cable lengths.
+//!   and the predicted cable lengths;
+//! * [`CsTendons`]: a robot with displacement-driven tendons solved from servo
+//!   readings (warm-started from the previous row), then read the tensions, taut
+//!   flags, tip position, section end poses and cable path lengths.
 //!
 //! Every entry point returns a [`CsCode`] (0 = OK) and catches panics
 //! (`catch_unwind`), so no unwind crosses the boundary; the message of the last
@@ -14,10 +17,18 @@
 //! status codes in the info structs. After the first tick, [`cs_estimator_tick`],
 //! [`cs_estimator_values`], [`cs_estimator_tip_position`] and
 //! [`cs_estimator_cable_lengths`] do not allocate (LM and Gauss-Newton methods;
-//! `capi/tests/alloc.rs` counts); [`cs_model_section_poses`] and
-//! [`cs_model_tip_pose`] recompute the shape and allocate.
+//! `capi/tests/alloc.rs` counts), nor do [`cs_tendons_tensions`],
+//! [`cs_tendons_tip_position`] and [`cs_tendons_cable_lengths`];
+//! [`cs_tendons_solve`] adds no allocation of its own, but the core's readings
+//! check allocates one short string per tendon per solve (to be removed in
+//! `src/tendons/solve.rs`); [`cs_model_section_poses`], [`cs_model_tip_pose`] and
+//! [`cs_tendons_section_poses`] recompute the shape and allocate.
+//!
+//! The header `capi/include/cablesense.h` is generated from this file by cbindgen
+//! (`capi/cbindgen.toml`); `capi/tests/header.rs` fails when it is out of date.
 
 use cablesense::estimate::{EstimateStatus, Estimator};
+use cablesense::tendons::TendonWorkspace;
 use cablesense::{Scene, SolveStatus, Start, Workspace};
 use std::cell::RefCell;
 use std::ffi::{c_char, CStr, CString};
@@ -64,6 +75,21 @@ pub struct CsEstimateInfo {
     pub rms_sigma: f64,
 }
 
+/// Outcome of a solve from tendon readings (`TendonReport`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CsTendonInfo {
+    /// 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
+    /// 5 unstable (as [`CsSolveInfo`]). Only 0 is a usable shape.
+    pub status: i32,
+    /// Newton iterations on the tensions.
+    pub iterations: u32,
+    /// Tendons slack at the returned point.
+    pub slack: u32,
+    /// `max_i |G_i|`, the length mismatch of the tendon conditions (m).
+    pub residual_m: f64,
+}
+
 /// Forward model handle.
 pub struct CsModel {
     ws: Workspace,
@@ -75,6 +101,12 @@ pub struct CsEstimator {
     lengths: Vec<f64>,
     changes: Vec<f64>,
     sigma: Vec<f64>,
+}
+
+/// Tendon readings solver handle; the readings buffer is sized once.
+pub struct CsTendons {
+    ws: TendonWorkspace,
+    readings: Vec<f64>,
 }
 
 thread_local! {
@@ -534,6 +566,243 @@ pub unsafe extern "C" fn cs_estimator_cable_lengths(
         h.est
             .model()
             .cable_lengths_into(unsafe { out_slice(out, n)? });
+        Ok(())
+    })
+}
+
+/// Create a tendon readings solver from scene TOML text whose robot has
+/// displacement-driven tendons (validates the scene and solves the reference at
+/// the pretensions). On success `*out` owns the handle (free it with
+/// [`cs_tendons_free`]).
+///
+/// # Safety
+/// `scene_toml` is a NUL-terminated string; `out` points to a writable pointer.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_new(
+    scene_toml: *const c_char,
+    out: *mut *mut CsTendons,
+) -> CsCode {
+    guard(|| {
+        if out.is_null() {
+            return Err(bad("out is null"));
+        }
+        let scene = scene_from(scene_toml)?;
+        let ws = scene
+            .tendon_workspace()
+            .map_err(|e| (CsCode::BadScene, e.to_string()))?;
+        if ws.driven().is_empty() {
+            return Err((
+                CsCode::BadScene,
+                "robot.cables: no displacement-driven tendon (actuation = \"displacement\")".into(),
+            ));
+        }
+        let h = CsTendons {
+            readings: vec![0.0; ws.driven().len()],
+            ws,
+        };
+        // SAFETY: checked non-null.
+        unsafe { *out = Box::into_raw(Box::new(h)) };
+        Ok(())
+    })
+}
+
+/// Free a tendon solver (null is ignored).
+///
+/// # Safety
+/// `t` comes from [`cs_tendons_new`] and is not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_free(t: *mut CsTendons) {
+    if !t.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: owned handle from cs_tendons_new.
+            drop(unsafe { Box::from_raw(t) })
+        }));
+    }
+}
+
+/// Number of displacement-driven tendons (readings per row), or 0 for a null
+/// handle. Their order is the cables' order in the scene.
+///
+/// # Safety
+/// `t` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_count(t: *const CsTendons) -> usize {
+    // SAFETY: live handle or null.
+    unsafe { t.as_ref() }.map_or(0, |t| t.readings.len())
+}
+
+/// Number of cables (driven or not), or 0 for a null handle.
+///
+/// # Safety
+/// `t` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_cable_count(t: *const CsTendons) -> usize {
+    // SAFETY: live handle or null.
+    unsafe { t.as_ref() }.map_or(0, |t| t.ws.workspace().robot().cables().len())
+}
+
+/// Number of sections, or 0 for a null handle.
+///
+/// # Safety
+/// `t` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_section_count(t: *const CsTendons) -> usize {
+    // SAFETY: live handle or null.
+    unsafe { t.as_ref() }.map_or(0, |t| t.ws.workspace().robot().sections().len())
+}
+
+/// Solve one row of readings: `readings[n]` (m, positive = pulled in, one per
+/// driven tendon, `n` = [`cs_tendons_count`]). `warm != 0` starts from the previous
+/// solve. A reading that is not finite or pulls in more than the whole tendon is
+/// `CS_BAD_ARGUMENT` with a message naming it (`readings[2] (s1c) ...`), and the
+/// solver keeps its previous state. The outcome is in `*info` (may be null). The
+/// C layer allocates nothing; the core's readings check still allocates one short
+/// string per tendon (see the crate documentation).
+///
+/// # Safety
+/// `t` is a live handle; `readings` holds `n` doubles; `info` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_solve(
+    t: *mut CsTendons,
+    readings: *const f64,
+    n: usize,
+    warm: i32,
+    info: *mut CsTendonInfo,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
+        let p = h.readings.len();
+        if n != p {
+            return Err(bad(format!(
+                "n = {n} readings for {p} displacement-driven tendons"
+            )));
+        }
+        if readings.is_null() {
+            return Err(bad("readings is null"));
+        }
+        // SAFETY: n doubles per the contract.
+        h.readings
+            .copy_from_slice(unsafe { std::slice::from_raw_parts(readings, n) });
+        let start = if warm != 0 { Start::Warm } else { Start::Cold };
+        let r =
+            h.ws.solve_readings_from(&h.readings, start)
+                .map_err(|e| bad(e.to_string()))?;
+        // SAFETY: null or writable.
+        if let Some(info) = unsafe { info.as_mut() } {
+            *info = CsTendonInfo {
+                status: solve_code(r.status),
+                iterations: r.iterations as u32,
+                slack: r.slack as u32,
+                residual_m: r.residual_m,
+            };
+        }
+        Ok(())
+    })
+}
+
+/// Tensions `tensions[n]` (N) and, unless null, taut flags `taut[n]` (1 taut, 0
+/// slack) of the driven tendons at the last solve, `n` = [`cs_tendons_count`]. No
+/// allocation.
+///
+/// # Safety
+/// `t` is a live handle; `tensions` (and `taut` unless null) hold `n` elements.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_tensions(
+    t: *const CsTendons,
+    tensions: *mut f64,
+    taut: *mut i32,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_ref() }.ok_or_else(|| bad("tendons is null"))?;
+        let p = h.readings.len();
+        if n != p {
+            return Err(bad(format!("n = {n} for {p} displacement-driven tendons")));
+        }
+        // SAFETY: n doubles per the contract.
+        unsafe { out_slice(tensions, n)? }.copy_from_slice(h.ws.tensions());
+        if !taut.is_null() {
+            // SAFETY: n ints per the contract (checked non-null).
+            let flags = unsafe { std::slice::from_raw_parts_mut(taut, n) };
+            for (f, &k) in flags.iter_mut().zip(h.ws.taut()) {
+                *f = i32::from(k);
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Tip position `[3]` (m) of the last solve. No allocation.
+///
+/// # Safety
+/// `t` is a live handle; `position` holds 3 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_tip_position(
+    t: *const CsTendons,
+    position: *mut f64,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_ref() }.ok_or_else(|| bad("tendons is null"))?;
+        // SAFETY: 3 doubles per the contract.
+        unsafe { out_slice(position, 3)? }.copy_from_slice(h.ws.tip_position().as_slice());
+        Ok(())
+    })
+}
+
+/// Path lengths (m) of every cable at the last solve, `n` =
+/// [`cs_tendons_cable_count`]. No allocation.
+///
+/// # Safety
+/// `t` is a live handle; `out` holds `n` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_cable_lengths(
+    t: *const CsTendons,
+    out: *mut f64,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_ref() }.ok_or_else(|| bad("tendons is null"))?;
+        let c = h.ws.lengths().len();
+        if n != c {
+            return Err(bad(format!("n = {n}, the robot has {c} cables")));
+        }
+        // SAFETY: n doubles per the contract.
+        unsafe { out_slice(out, n)? }.copy_from_slice(h.ws.lengths());
+        Ok(())
+    })
+}
+
+/// Section end poses of the last solve: `positions[3 n]` (m), `rotations[9 n]`
+/// (column-major each), `n` = [`cs_tendons_section_count`]. Allocates (recomputes
+/// the shape).
+///
+/// # Safety
+/// `t` is a live handle; the buffers hold `3 n` and `9 n` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_section_poses(
+    t: *mut CsTendons,
+    positions: *mut f64,
+    rotations: *mut f64,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
+        let k = h.ws.workspace().robot().sections().len();
+        if n != k {
+            return Err(bad(format!("n = {n}, the robot has {k} sections")));
+        }
+        // SAFETY: buffer sizes per the contract.
+        let (p, r) = unsafe { (out_slice(positions, 3 * n)?, out_slice(rotations, 9 * n)?) };
+        let sol = h.ws.workspace_mut().solution();
+        for (i, s) in sol.section_tips.iter().enumerate() {
+            p[3 * i..3 * i + 3].copy_from_slice(s.position.as_slice());
+            r[9 * i..9 * i + 9].copy_from_slice(s.rotation.as_slice());
+        }
         Ok(())
     })
 }

@@ -187,3 +187,60 @@ fn bad_scenes_are_errors_with_the_field_path() {
         CsCode::BadArgument
     );
 }
+
+#[test]
+fn tendon_readers_do_not_allocate_and_the_solve_adds_none() {
+    let text = scene("data/scenes/tdcr_two_segment.toml");
+    let mut t = std::ptr::null_mut();
+    // SAFETY: valid string and out pointer; the handle lives until the free below.
+    unsafe {
+        assert_eq!(cs_tendons_new(text.as_ptr(), &mut t), CsCode::Ok);
+        let (p, c) = (cs_tendons_count(t), cs_tendons_cable_count(t));
+        assert_eq!((p, c), (6, 6));
+        let (mut tension, mut taut, mut tip, mut len) = ([0.0; 6], [0i32; 6], [0.0; 3], [0.0; 6]);
+        let mut info = CsTendonInfo::default();
+        // a slow pull of s1a against s1b (m), as a servo loop would send it
+        let mut solve = |k: usize| {
+            let x = 1e-3 * (k as f64 * 0.3).sin();
+            let q = [x.max(0.0), (-x).max(0.0), 0.0, 0.2e-3, 0.0, 0.0];
+            assert_eq!(cs_tendons_solve(t, q.as_ptr(), p, 1, &mut info), CsCode::Ok);
+            assert_eq!(info.status, 0, "{info:?}");
+            assert_eq!(
+                cs_tendons_tensions(t, tension.as_mut_ptr(), taut.as_mut_ptr(), p),
+                CsCode::Ok
+            );
+            assert_eq!(cs_tendons_tip_position(t, tip.as_mut_ptr()), CsCode::Ok);
+            assert_eq!(cs_tendons_cable_lengths(t, len.as_mut_ptr(), c), CsCode::Ok);
+        };
+        for k in 0..3 {
+            solve(k);
+        }
+        // the solve: the C layer adds none; the core's readings check
+        // (`TendonWorkspace::check_readings`, src/tendons/solve.rs) formats each
+        // reading's field name before testing it, one string per tendon per solve
+        // (6 here), to be removed there: at most that many
+        let before = allocs();
+        for k in 3..23 {
+            solve(k);
+        }
+        let n = allocs() - before;
+        assert!(n <= 20 * p, "{n} allocations in 20 warm tendon solves");
+        println!("{n} allocations in 20 warm tendon solves ({p} tendons)");
+        // the readers allocate nothing
+        let before = allocs();
+        for _ in 0..20 {
+            assert_eq!(
+                cs_tendons_tensions(t, tension.as_mut_ptr(), taut.as_mut_ptr(), p),
+                CsCode::Ok
+            );
+            assert_eq!(cs_tendons_tip_position(t, tip.as_mut_ptr()), CsCode::Ok);
+            assert_eq!(cs_tendons_cable_lengths(t, len.as_mut_ptr(), c), CsCode::Ok);
+        }
+        assert_eq!(allocs() - before, 0, "allocations in the readers");
+        assert!(
+            tip[2] > 0.19 && tension.iter().all(|x| *x >= 0.0),
+            "{tip:?} {tension:?}"
+        );
+        cs_tendons_free(t);
+    }
+}

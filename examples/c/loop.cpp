@@ -73,7 +73,7 @@ int main(int argc, char **argv) {
   const long ticks = argc > 3 ? std::atol(argv[3]) : 2000;
   const std::string scene = read_file(argv[1]);
   CsEstimator *est = nullptr;
-  if (cs_estimator_new(scene.c_str(), &est) != CS_OK) {
+  if (cs_estimator_new(scene.c_str(), &est) != CS_CODE_OK) {
     std::fprintf(stderr, "error: %s\n", cs_last_error());
     return 1;
   }
@@ -93,10 +93,10 @@ int main(int argc, char **argv) {
     CsEstimateInfo info;
     const auto t0 = std::chrono::steady_clock::now();
     CsCode code = cs_estimator_tick(est, row.data(), nullptr, c, &info);
-    if (code == CS_OK) code = cs_estimator_values(est, values.data(), cov.data(), p);
-    if (code == CS_OK) code = cs_estimator_tip_position(est, tip);
+    if (code == CS_CODE_OK) code = cs_estimator_values(est, values.data(), cov.data(), p);
+    if (code == CS_CODE_OK) code = cs_estimator_tip_position(est, tip);
     const auto t1 = std::chrono::steady_clock::now();
-    if (code != CS_OK) {
+    if (code != CS_CODE_OK) {
       std::fprintf(stderr, "tick %ld: error %d: %s\n", k, static_cast<int>(code), cs_last_error());
       return 1;
     }
@@ -106,7 +106,7 @@ int main(int argc, char **argv) {
     if (k == 0) first = values;
   }
   // a bad call must fail cleanly with a message
-  if (cs_estimator_tick(est, nullptr, nullptr, c, nullptr) != CS_BAD_ARGUMENT) return 1;
+  if (cs_estimator_tick(est, nullptr, nullptr, c, nullptr) != CS_CODE_BAD_ARGUMENT) return 1;
   std::printf("bad call: %s\n", cs_last_error());
   cs_estimator_free(est);
 

@@ -1,6 +1,12 @@
 //! Python module `cablesense` (extension `cablesense._cablesense`): scenes, forward
-//! solves with numpy arrays, a warm-started solver, the estimator. Only translates
-//! types and errors; the GIL is released inside every solve and tick.
+//! solves with numpy arrays, a warm-started solver, the estimator, solves from tendon
+//! readings (`tendons.rs`), calibration from a recording (`calibrate.rs`) and the
+//! thesis validation (`validation.rs`). Only
+//! translates types and errors; the GIL is released inside every solve and tick.
+
+mod calibrate;
+mod tendons;
+mod validation;
 
 use cablesense::estimate::{Estimate, Estimator};
 use cablesense::{ModelError, Scene as CoreScene, Solution, Start, Workspace};
@@ -16,6 +22,13 @@ create_exception!(
     SceneError,
     PyValueError,
     "A scene could not be read or is invalid; `field` is the offending field path (or None)."
+);
+create_exception!(
+    cablesense,
+    ReadingsError,
+    PyValueError,
+    "Tendon readings are bad (wrong count, not finite, pulling in more than the tendon); \
+     `field` names the reading (e.g. `readings[1] (s1b)`), `line` the file line (or None)."
 );
 
 /// The field path of a model error.
@@ -35,7 +48,7 @@ fn field_of(e: &ModelError) -> Option<String> {
 }
 
 /// A Python `SceneError` with the message and `field` attribute.
-fn scene_err(py: Python<'_>, msg: String, field: Option<String>) -> PyErr {
+pub(crate) fn scene_err(py: Python<'_>, msg: String, field: Option<String>) -> PyErr {
     let err = SceneError::new_err(msg);
     let _ = err.value(py).setattr("field", field);
     err
@@ -49,7 +62,7 @@ fn from_scene_error(py: Python<'_>, e: cablesense::SceneError) -> PyErr {
     scene_err(py, e.to_string(), field)
 }
 
-fn from_model_error(py: Python<'_>, e: ModelError) -> PyErr {
+pub(crate) fn from_model_error(py: Python<'_>, e: ModelError) -> PyErr {
     let field = field_of(&e);
     scene_err(py, e.to_string(), field)
 }
@@ -57,8 +70,8 @@ fn from_model_error(py: Python<'_>, e: ModelError) -> PyErr {
 /// A validated scene: robot, loads, numerics and optional `[estimate]`.
 #[pyclass(module = "cablesense", frozen)]
 #[derive(Clone)]
-struct Scene {
-    inner: CoreScene,
+pub(crate) struct Scene {
+    pub(crate) inner: CoreScene,
 }
 
 #[pymethods]
@@ -116,8 +129,50 @@ fn workspace(py: Python<'_>, scene: &CoreScene) -> PyResult<Workspace> {
         .map_err(|e| from_model_error(py, e))
 }
 
+/// A Python `ReadingsError` with the message, `field` and `line` attributes.
+pub(crate) fn readings_err(py: Python<'_>, e: ModelError, line: Option<usize>) -> PyErr {
+    let field = field_of(&e);
+    let msg = match line {
+        Some(l) => format!("line {l}: {e}"),
+        None => e.to_string(),
+    };
+    let err = ReadingsError::new_err(msg);
+    let _ = err.value(py).setattr("field", field);
+    let _ = err.value(py).setattr("line", line);
+    err
+}
+
+/// Copy a sequence of floats or a 1-D float64 array into `buf` (cleared first;
+/// no allocation once `buf` has the capacity). `what` names the argument in a
+/// type error.
+pub(crate) fn read_f64s(obj: &Bound<'_, PyAny>, buf: &mut Vec<f64>, what: &str) -> PyResult<()> {
+    buf.clear();
+    if let Ok(a) = obj.cast::<numpy::PyArray1<f64>>() {
+        let a = a.readonly();
+        if let Ok(s) = a.as_slice() {
+            buf.extend_from_slice(s);
+            return Ok(());
+        }
+        buf.extend(a.as_array().iter());
+        return Ok(());
+    }
+    for item in obj.try_iter().map_err(|_| {
+        pyo3::exceptions::PyTypeError::new_err(format!(
+            "{what}: expected a sequence of floats or a 1-D float64 array"
+        ))
+    })? {
+        buf.push(item?.extract::<f64>()?);
+    }
+    Ok(())
+}
+
+/// A status as the snake-case string of the Python API.
+pub(crate) fn report_status(s: cablesense::SolveStatus) -> String {
+    to_snake(&format!("{s:?}"))
+}
+
 /// A solution as a dict of numpy arrays.
-fn solution_dict<'py>(py: Python<'py>, sol: &Solution) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn solution_dict<'py>(py: Python<'py>, sol: &Solution) -> PyResult<Bound<'py, PyDict>> {
     let n = sol.samples.len();
     let d = PyDict::new(py);
     let s: Vec<f64> = sol.samples.iter().map(|x| x.s).collect();
@@ -235,6 +290,9 @@ impl Solver {
 #[pyclass(module = "cablesense", name = "Estimator")]
 struct PyEstimator {
     est: Estimator,
+    /// The sample of one tick (reused: no allocation per tick for the input).
+    changes: Vec<f64>,
+    sigma: Vec<f64>,
 }
 
 fn estimate_dict<'py>(py: Python<'py>, e: &Estimate) -> PyResult<Bound<'py, PyDict>> {
@@ -286,7 +344,12 @@ impl PyEstimator {
                 other => scene_err(py, other.to_string(), None),
             },
         )?;
-        Ok(Self { est })
+        let c = est.reference_lengths().len();
+        Ok(Self {
+            est,
+            changes: Vec::with_capacity(c),
+            sigma: Vec::with_capacity(c),
+        })
     }
     /// Unknown names.
     #[getter]
@@ -294,30 +357,102 @@ impl PyEstimator {
         self.est.names().to_vec()
     }
     /// One sample: cable length changes (m; NaN = missing) and optional per-cable
-    /// noise (m). Returns the estimate dict.
-    #[pyo3(signature = (changes, sigma = None))]
+    /// noise (m). Returns the estimate dict (the snapshot `Estimator::estimate`:
+    /// exact statistics, fit test, the shape recomputed for the tip). With
+    /// `snapshot=False` only the tick runs and the dict is {status, values,
+    /// covariance (from the sensitivities the tick ended with), statistics_exact,
+    /// tip}: the control-loop path, as the C ABI's tick (the snapshot costs about
+    /// 16 us on the track demo, `python/bench/tick_overhead.py`).
+    #[pyo3(signature = (changes, sigma = None, snapshot = true))]
     fn tick<'py>(
         &mut self,
         py: Python<'py>,
-        changes: Vec<f64>,
-        sigma: Option<Vec<f64>>,
+        changes: &Bound<'py, PyAny>,
+        sigma: Option<&Bound<'py, PyAny>>,
+        snapshot: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
+        read_f64s(changes, &mut self.changes, "changes")?;
+        if let Some(s) = sigma {
+            read_f64s(s, &mut self.sigma, "sigma")?;
+        }
         let c = self.est.reference_lengths().len();
-        if changes.len() != c || sigma.as_ref().is_some_and(|s| s.len() != c) {
+        if self.changes.len() != c || sigma.is_some() && self.sigma.len() != c {
             return Err(PyValueError::new_err(format!(
                 "{} changes{} for {c} cables",
-                changes.len(),
-                sigma
-                    .as_ref()
-                    .map_or(String::new(), |s| format!(" and {} sigmas", s.len()))
+                self.changes.len(),
+                if sigma.is_some() {
+                    format!(" and {} sigmas", self.sigma.len())
+                } else {
+                    String::new()
+                }
             )));
         }
-        let est = &mut self.est;
+        let (est, changes) = (&mut self.est, &self.changes);
+        let sigma = sigma.is_some().then_some(&self.sigma[..]);
+        if !snapshot {
+            let status = py.detach(|| est.tick(changes, sigma));
+            let p = est.theta().len();
+            let d = PyDict::new(py);
+            d.set_item("status", to_snake(&format!("{status:?}")))?;
+            d.set_item("values", PyArray1::from_slice(py, est.theta()))?;
+            let cov: Bound<'py, PyArray2<f64>> =
+                PyArray1::from_slice(py, est.covariance()).reshape([p, p])?;
+            d.set_item("covariance", cov)?;
+            d.set_item("statistics_exact", est.statistics_are_exact())?;
+            d.set_item(
+                "tip",
+                PyArray1::from_slice(py, est.tip_position().as_slice()),
+            )?;
+            return Ok(d);
+        }
         let e = py.detach(|| {
-            est.tick(&changes, sigma.as_deref());
+            est.tick(changes, sigma);
             est.estimate()
         });
         estimate_dict(py, &e)
+    }
+
+    /// Time `count` ticks in Rust alone (no Python in the loop), cycling over the
+    /// rows of `samples` (n, c), each timed on its own (`Instant`); returns the
+    /// seconds per tick. With `snapshot=True` each timed tick also takes the
+    /// estimate snapshot that `tick` returns (`Estimator::estimate`: exact
+    /// statistics, the shape recomputed for the tip). For measuring the binding's
+    /// overhead against the same estimator in the same process
+    /// (`python/bench/tick_overhead.py`).
+    #[pyo3(signature = (samples, count, snapshot = false))]
+    fn time_ticks<'py>(
+        &mut self,
+        py: Python<'py>,
+        samples: numpy::PyReadonlyArray2<'py, f64>,
+        count: usize,
+        snapshot: bool,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let c = self.est.reference_lengths().len();
+        let (rows_n, cols) = samples.as_array().dim();
+        let shape = [rows_n, cols];
+        if shape[1] != c || shape[0] == 0 {
+            return Err(PyValueError::new_err(format!(
+                "samples of shape ({}, {}) for {c} cables",
+                shape[0], shape[1]
+            )));
+        }
+        let rows: Vec<f64> = samples.as_array().iter().copied().collect();
+        let est = &mut self.est;
+        let times = py.detach(|| {
+            let mut t = Vec::with_capacity(count);
+            for k in 0..count {
+                let i = k % shape[0];
+                let row = &rows[i * c..(i + 1) * c];
+                let t0 = std::time::Instant::now();
+                std::hint::black_box(est.tick(std::hint::black_box(row), None));
+                if snapshot {
+                    std::hint::black_box(est.estimate());
+                }
+                t.push(t0.elapsed().as_secs_f64());
+            }
+            t
+        });
+        Ok(times.into_pyarray(py))
     }
 }
 
@@ -327,7 +462,16 @@ fn _cablesense(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Scene>()?;
     m.add_class::<Solver>()?;
     m.add_class::<PyEstimator>()?;
+    m.add_class::<tendons::TendonSolver>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(validation::validate_thesis, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::predict_recording, m)?)?;
     m.add("SceneError", m.py().get_type::<SceneError>())?;
+    m.add("ReadingsError", m.py().get_type::<ReadingsError>())?;
+    m.add(
+        "CalibrationError",
+        m.py().get_type::<calibrate::CalibrationError>(),
+    )?;
     Ok(())
 }

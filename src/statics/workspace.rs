@@ -389,8 +389,9 @@ impl Workspace {
     /// reached by loading the unloaded rod quasi-statically" (cold) or "on the branch
     /// of the previous solution" (warm), as far as the guard can tell: Jacobi's
     /// condition for world-fixed loads, a branch-checked load continuation for other
-    /// loads above [`CERTIFY_INTENSITY`], and for warm solves a check that Newton went
-    /// where its first (tangent) step pointed, else a checked cold solve.
+    /// loads above a load intensity of 3 (`CERTIFY_INTENSITY`), and for warm solves a
+    /// check that Newton went where its first (tangent) step pointed, else a checked
+    /// cold solve.
     pub fn solve(&mut self, start: Start) -> SolveReport {
         let rhs0 = self.rhs_count();
         self.jac_evals = 0;

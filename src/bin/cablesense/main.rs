@@ -49,8 +49,11 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
+    output::quiet_on_broken_pipe();
     let cli = Cli::parse();
-    let result = match cli.command {
+    // `println!` panics when stdout is a closed pipe (`cablesense ... | head`): the
+    // hook above keeps that panic quiet, and it ends here as a quiet exit
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match cli.command {
         Command::Solve(a) => solve::run(a),
         Command::Validate(a) => validate::run(a),
         Command::Calibrate(a) => calibrate::run(*a),
@@ -59,9 +62,16 @@ fn main() -> std::process::ExitCode {
         Command::Pareto(a) => pareto::run(a),
         Command::Stability(a) => stability::run(a),
         Command::Demo(a) => demo::run(a),
+    }));
+    let result = match result {
+        Ok(r) => r,
+        Err(_) if output::stdout_was_closed() => return std::process::ExitCode::SUCCESS,
+        Err(payload) => std::panic::resume_unwind(payload),
     };
     match result {
         Ok(code) => code,
+        // a stream command's `writeln!(stdout)` returned the closed pipe as an error
+        Err(e) if output::is_broken_pipe(&e) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             std::process::ExitCode::from(2)

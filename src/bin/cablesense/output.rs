@@ -2,6 +2,59 @@
 
 use cablesense::{Pose, Sample};
 use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set by the panic hook of [`quiet_on_broken_pipe`] when `print!`/`println!` failed
+/// because stdout is a closed pipe.
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// Text of the OS errors that mean "the reader of this pipe is gone" (EPIPE on Unix;
+/// ERROR_BROKEN_PIPE and ERROR_NO_DATA on Windows), as `std::io::Error` prints them.
+fn broken_pipe_texts() -> Vec<String> {
+    let codes: &[i32] = if cfg!(windows) { &[109, 232] } else { &[32] };
+    codes
+        .iter()
+        .map(|&c| std::io::Error::from_raw_os_error(c).to_string())
+        .collect()
+}
+
+/// Install a panic hook that keeps quiet about the panic of `print!`/`println!` on a
+/// closed stdout (`cablesense validate | head`: std panics with "failed printing to
+/// stdout: Broken pipe (os error 32)") and records it for [`stdout_was_closed`]; every
+/// other panic goes to the default hook. The panic still unwinds (open files are
+/// flushed and closed); `main` turns it into a quiet exit with code 0, as for a
+/// stream command that got the closed pipe as an error ([`is_broken_pipe`]).
+pub fn quiet_on_broken_pipe() {
+    let texts = broken_pipe_texts();
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let msg = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.starts_with("failed printing to stdout") && texts.iter().any(|t| msg.contains(t)) {
+            STDOUT_CLOSED.store(true, Ordering::SeqCst);
+        } else {
+            default(info);
+        }
+    }));
+}
+
+/// Whether a `print!` on a closed stdout panicked (see [`quiet_on_broken_pipe`]).
+pub fn stdout_was_closed() -> bool {
+    STDOUT_CLOSED.load(Ordering::SeqCst)
+}
+
+/// Whether an error comes from writing to a closed pipe (`io::ErrorKind::BrokenPipe`
+/// anywhere in its chain).
+pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
 
 /// `x y z` in mm with 3 decimals.
 pub fn mm(v: &cablesense::nalgebra::Vector3<f64>) -> String {
