@@ -10,9 +10,8 @@
  * Units: SI (m, N, N m, kg). Rotations: 9 doubles, column-major.
  * Per tick, cs_estimator_tick, cs_estimator_values, cs_estimator_tip_position and
  * cs_estimator_cable_lengths do not allocate after the first tick, nor do
- * cs_tendons_tensions, cs_tendons_tip_position and cs_tendons_cable_lengths;
- * cs_tendons_solve allocates one short string per tendon (the core's readings
- * check; to be removed there); cs_model_tip_pose,
+ * cs_tendons_tensions, cs_tendons_tip_position, cs_tendons_cable_lengths and a
+ * warm cs_tendons_solve; cs_model_tip_pose,
  * cs_model_section_poses and cs_tendons_section_poses recompute the shape and
  * allocate. */
 
@@ -239,8 +238,7 @@ size_t cs_tendons_section_count(const struct CsTendons *t);
 // solve. A reading that is not finite or pulls in more than the whole tendon is
 // `CS_BAD_ARGUMENT` with a message naming it (`readings[2] (s1c) ...`), and the
 // solver keeps its previous state. The outcome is in `*info` (may be null). The
-// C layer allocates nothing; the core's readings check still allocates one short
-// string per tendon (see the crate documentation).
+// warm solve allocates nothing.
 //
 // # Safety
 // `t` is a live handle; `readings` holds `n` doubles; `info` is null or writable.

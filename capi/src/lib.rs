@@ -19,9 +19,7 @@
 //! [`cs_estimator_cable_lengths`] do not allocate (LM and Gauss-Newton methods;
 //! `capi/tests/alloc.rs` counts), nor do [`cs_tendons_tensions`],
 //! [`cs_tendons_tip_position`] and [`cs_tendons_cable_lengths`];
-//! [`cs_tendons_solve`] adds no allocation of its own, but the core's readings
-//! check allocates one short string per tendon per solve (to be removed in
-//! `src/tendons/solve.rs`); [`cs_model_section_poses`], [`cs_model_tip_pose`] and
+//! nor does a warm [`cs_tendons_solve`]; [`cs_model_section_poses`], [`cs_model_tip_pose`] and
 //! [`cs_tendons_section_poses`] recompute the shape and allocate.
 //!
 //! The header `capi/include/cablesense.h` is generated from this file by cbindgen
@@ -656,8 +654,7 @@ pub unsafe extern "C" fn cs_tendons_section_count(t: *const CsTendons) -> usize 
 /// solve. A reading that is not finite or pulls in more than the whole tendon is
 /// `CS_BAD_ARGUMENT` with a message naming it (`readings[2] (s1c) ...`), and the
 /// solver keeps its previous state. The outcome is in `*info` (may be null). The
-/// C layer allocates nothing; the core's readings check still allocates one short
-/// string per tendon (see the crate documentation).
+/// warm solve allocates nothing.
 ///
 /// # Safety
 /// `t` is a live handle; `readings` holds `n` doubles; `info` is null or writable.

@@ -215,17 +215,16 @@ fn tendon_readers_do_not_allocate_and_the_solve_adds_none() {
         for k in 0..3 {
             solve(k);
         }
-        // the solve: the C layer adds none; the core's readings check
-        // (`TendonWorkspace::check_readings`, src/tendons/solve.rs) formats each
-        // reading's field name before testing it, one string per tendon per solve
-        // (6 here), to be removed there: at most that many
+        // the solve: neither the C layer nor the core allocates per warm solve
         let before = allocs();
         for k in 3..23 {
             solve(k);
         }
         let n = allocs() - before;
-        assert!(n <= 20 * p, "{n} allocations in 20 warm tendon solves");
-        println!("{n} allocations in 20 warm tendon solves ({p} tendons)");
+        assert_eq!(
+            n, 0,
+            "{n} allocations in 20 warm tendon solves ({p} tendons)"
+        );
         // the readers allocate nothing
         let before = allocs();
         for _ in 0..20 {

@@ -350,7 +350,13 @@ impl TendonWorkspace {
             });
         }
         for (i, &v) in q.iter().enumerate() {
-            ModelError::finite(format!("readings[{i}] ({})", self.columns[i]), v)?;
+            // (the field name is built only on failure: no allocation per row)
+            if !v.is_finite() {
+                return Err(ModelError::NonFinite {
+                    field: format!("readings[{i}] ({})", self.columns[i]),
+                    value: v,
+                });
+            }
             let free = self.free0[i] - (v - self.mech[i].zero_offset_m);
             if free <= 0.0 {
                 return Err(ModelError::OutOfRange {
