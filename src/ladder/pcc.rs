@@ -38,6 +38,7 @@
 
 use super::anderson::{Anderson, MAX_DEPTH};
 use super::arc::{arc_pose_t, PoseT};
+use super::kinematics::TendonKinematics;
 use super::sens::{seed_theta, seed_u, unit_t, Implicit, LoadsT, D6, W};
 use super::{add_params, check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
 use crate::cables::path_length;
@@ -199,6 +200,9 @@ pub struct PiecewiseConstantCurvature {
     /// Sensitivity buffers, built by the first
     /// [`PiecewiseConstantCurvature::length_sensitivities`].
     sens: Option<(Buf<D6>, Implicit)>,
+    /// Readings -> arcs, built by the first
+    /// [`PiecewiseConstantCurvature::solve_readings`].
+    kin: Option<TendonKinematics>,
 }
 
 impl PiecewiseConstantCurvature {
@@ -322,6 +326,7 @@ impl PiecewiseConstantCurvature {
                 residual: f64::INFINITY,
             },
             sens: None,
+            kin: None,
             layout,
             settings,
         })
@@ -378,6 +383,41 @@ impl PiecewiseConstantCurvature {
         for (u, p) in self.b.u.iter_mut().zip(&self.layout.pieces) {
             *u = self.layout.robot.sections()[p.section].precurvature;
         }
+    }
+
+    /// Displacement actuation by the constant-curvature kinematics per section
+    /// (module `kinematics`; the proximal sections' path change of a distal tendon is
+    /// subtracted from its reading): every piece of section `k` takes section `k`'s
+    /// arc. Pure kinematics has nothing to say below a section, so the shape equals
+    /// [`ConstantCurvature::solve_readings`](super::ConstantCurvature::solve_readings)'s;
+    /// the pieces only resample it. Errors as there.
+    pub fn solve_readings(&mut self, readings_m: &[f64]) -> Result<LadderReport, LadderError> {
+        let mut kin = match self.kin.take() {
+            Some(k) => k,
+            None => TendonKinematics::new(&self.layout.robot)?,
+        };
+        let solved = kin.solve(readings_m);
+        let kin = self.kin.insert(kin);
+        solved?;
+        for (u, p) in self.b.u.iter_mut().zip(&self.layout.pieces) {
+            *u = kin.curvature(p.section);
+        }
+        self.layout.kinematics(&mut self.b);
+        for (j, l) in self.lengths.iter_mut().enumerate() {
+            *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
+        }
+        self.report = LadderReport {
+            status: SolveStatus::Converged,
+            iterations: 0,
+            residual: 0.0,
+        };
+        Ok(self.report)
+    }
+
+    /// The tendon kinematics of the last
+    /// [`PiecewiseConstantCurvature::solve_readings`]; `None` before the first.
+    pub fn kinematics(&self) -> Option<&TendonKinematics> {
+        self.kin.as_ref()
     }
 
     /// [`ForwardModel::solve`] for `loads` plus `theta_k` at `params[k]` (see
