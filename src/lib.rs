@@ -5,6 +5,7 @@ pub mod cables;
 pub mod calibrate;
 pub mod error;
 pub mod estimate;
+pub mod experiments;
 pub mod files;
 pub mod integrate;
 pub mod ladder;

@@ -32,6 +32,7 @@
 
 use super::anderson::Anderson;
 use super::arc::{arc_pose_t, PoseT};
+use super::kinematics::TendonKinematics;
 use super::sens::{seed_theta, seed_u, Implicit, LoadsT, D6, W};
 use super::{add_params, check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
 use crate::cables::path_length;
@@ -217,6 +218,8 @@ pub struct ConstantCurvature {
     report: LadderReport,
     /// Sensitivity buffers, built by the first [`ConstantCurvature::length_sensitivities`].
     sens: Option<(Buf<D6>, Implicit)>,
+    /// Readings -> arcs, built by the first [`ConstantCurvature::solve_readings`].
+    kin: Option<TendonKinematics>,
 }
 
 impl ConstantCurvature {
@@ -259,6 +262,7 @@ impl ConstantCurvature {
                 residual: f64::INFINITY,
             },
             sens: None,
+            kin: None,
             layout: Layout {
                 robot,
                 arms,
@@ -278,6 +282,38 @@ impl ConstantCurvature {
         for (j, l) in self.lengths.iter_mut().enumerate() {
             *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
         }
+    }
+
+    /// Displacement actuation: the classic constant-curvature kinematics of the
+    /// tendons (module `kinematics`, Webster & Jones 2010): readings (m, one per
+    /// displacement-driven tendon, positive = pulled) -> one arc per section in closed
+    /// form, no loads. Every pose and cable length follows from the arcs as for
+    /// [`ForwardModel::solve`]. An error when no tendon is displacement-driven or a
+    /// reading is missing or not finite.
+    pub fn solve_readings(&mut self, readings_m: &[f64]) -> Result<LadderReport, LadderError> {
+        let mut kin = match self.kin.take() {
+            Some(k) => k,
+            None => TendonKinematics::new(&self.layout.robot)?,
+        };
+        let solved = kin.solve(readings_m);
+        let kin = self.kin.insert(kin);
+        solved?;
+        for (k, u) in self.b.u.iter_mut().enumerate() {
+            *u = kin.curvature(k);
+        }
+        self.finish();
+        self.report = LadderReport {
+            status: SolveStatus::Converged,
+            iterations: 0,
+            residual: 0.0,
+        };
+        Ok(self.report)
+    }
+
+    /// The tendon kinematics of the last [`ConstantCurvature::solve_readings`]
+    /// (arcs, taut flags); `None` before the first.
+    pub fn kinematics(&self) -> Option<&TendonKinematics> {
+        self.kin.as_ref()
     }
 
     /// [`ForwardModel::solve`] for `loads` plus `theta_k` at `params[k]` (see

@@ -16,12 +16,21 @@
 //! through their [`SolverSettings`] ([`Rung::solver_settings`]) and the shooting
 //! workspace, the curvature rungs through [`Differentiable`], their exact cable-length
 //! sensitivities by implicit differentiation of their fixed points.
+//!
+//! **Displacement-driven tendons.** Every rung can also be driven by actuator
+//! readings ([`ReadingsModel`], [`Rung::build_readings`]): CC with displacement
+//! control is the classic constant-curvature kinematics of Webster & Jones 2010
+//! (readings -> one arc per section in closed form, [`TendonKinematics`]); PCC takes
+//! the same arcs per section; the rod rungs solve the tendon mechanics
+//! ([`crate::tendons::TendonWorkspace`]).
 
 mod anderson;
 mod arc;
 mod auto;
 mod cc;
+mod kinematics;
 mod pcc;
+mod readings;
 mod rod;
 mod sens;
 
@@ -30,7 +39,9 @@ pub use auto::{
     choose, parse_length, AutoChoice, AutoSettings, CandidateReport, LengthParseError, Verdict,
 };
 pub use cc::{CcSettings, ConstantCurvature};
+pub use kinematics::TendonKinematics;
 pub use pcc::{PccSettings, PiecewiseConstantCurvature};
+pub use readings::{readings_ladder, ReadingsModel};
 pub use rod::RodRung;
 
 use crate::error::ModelError;

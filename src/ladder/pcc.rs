@@ -36,9 +36,13 @@
 //! [`PiecewiseConstantCurvature::length_sensitivities`] over dual numbers to
 //! differentiate the converged fixed point implicitly (module `sens`).
 
+mod layout;
+mod sweep;
+
 use super::anderson::{Anderson, MAX_DEPTH};
-use super::arc::{arc_pose_t, PoseT};
-use super::sens::{seed_theta, seed_u, unit_t, Implicit, LoadsT, D6, W};
+use super::arc::PoseT;
+use super::kinematics::TendonKinematics;
+use super::sens::{seed_theta, seed_u, Implicit, LoadsT, D6, W};
 use super::{add_params, check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
 use crate::cables::path_length;
 use crate::loads::Loads;
@@ -199,118 +203,17 @@ pub struct PiecewiseConstantCurvature {
     /// Sensitivity buffers, built by the first
     /// [`PiecewiseConstantCurvature::length_sensitivities`].
     sens: Option<(Buf<D6>, Implicit)>,
+    /// Readings -> arcs, built by the first
+    /// [`PiecewiseConstantCurvature::solve_readings`].
+    kin: Option<TendonKinematics>,
 }
 
 impl PiecewiseConstantCurvature {
     /// Build the pieces for `robot`.
     pub fn new(robot: Robot, settings: PccSettings) -> Result<Self, LadderError> {
         settings.validate()?;
-        let length = robot.length();
-        let tol = 1e-12 * length;
-        let mut cuts: Vec<(f64, Option<Mark>)> = Vec::new();
-        for (k, sec) in robot.sections().iter().enumerate() {
-            cuts.push((sec.end(), Some(Mark::SectionEnd(k))));
-        }
-        for (g, guide) in robot.guides().iter().enumerate() {
-            cuts.push((guide.s, Some(Mark::Guide(g))));
-            if settings.guide_mass == GuideMass::Accurate && guide.thickness > 0.0 {
-                cuts.push((guide.s - guide.thickness / 2.0, None));
-                cuts.push((guide.s + guide.thickness / 2.0, None));
-            }
-        }
-        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut pieces = Vec::new();
-        let mut guide_boundary = vec![0; robot.guides().len()];
-        let mut section_ends = vec![0; robot.sections().len()];
-        let mut s0 = 0.0;
-        let mut i = 0;
-        // marks at s = 0 (a disk at the clamp) sit on boundary 0
-        while i < cuts.len() && cuts[i].0 <= tol {
-            i += 1;
-        }
-        while i < cuts.len() {
-            let s1 = cuts[i].0.min(length);
-            let j0 = i;
-            while i < cuts.len() && cuts[i].0 - s1 <= tol {
-                i += 1;
-            }
-            let k = robot.section_at(0.5 * (s0 + s1));
-            let sec = &robot.sections()[k];
-            let n = ((settings.pieces_per_section as f64) * (s1 - s0) / sec.length)
-                .ceil()
-                .max(1.0) as usize;
-            let mid = 0.5 * (s0 + s1);
-            let mut lambda = sec.stiffness.linear_density;
-            let gs = &robot.guides()[sec.guides.clone()];
-            match settings.guide_mass {
-                GuideMass::Average => lambda += gs.iter().map(|g| g.mass).sum::<f64>() / sec.length,
-                GuideMass::Accurate => {
-                    for g in gs {
-                        if g.thickness > 0.0 && (mid - g.s).abs() < g.thickness / 2.0 {
-                            lambda += g.mass / g.thickness;
-                        }
-                    }
-                }
-                GuideMass::None | GuideMass::Point => {}
-            }
-            for _ in 0..n {
-                pieces.push(Piece {
-                    h: (s1 - s0) / n as f64,
-                    section: k,
-                    lambda,
-                });
-            }
-            // the interval's marks sit on its last boundary
-            for c in &cuts[j0..i] {
-                match c.1 {
-                    Some(Mark::Guide(g)) => guide_boundary[g] = pieces.len(),
-                    Some(Mark::SectionEnd(k)) => section_ends[k] = pieces.len(),
-                    None => {}
-                }
-            }
-            s0 = s1;
-        }
-        // marks of boundary b are `ordered[at[b]..at[b + 1]]` (a counting sort)
-        let nb = pieces.len() + 1;
-        let mut at = vec![0usize; nb + 1];
-        for &b in guide_boundary.iter().chain(&section_ends) {
-            at[b + 1] += 1;
-        }
-        for b in 0..nb {
-            at[b + 1] += at[b];
-        }
-        let mut fill = at.clone();
-        let mut ordered = vec![Mark::SectionEnd(0); at[nb]];
-        for (g, &b) in guide_boundary.iter().enumerate() {
-            ordered[fill[b]] = Mark::Guide(g);
-            fill[b] += 1;
-        }
-        for (k, &b) in section_ends.iter().enumerate() {
-            ordered[fill[b]] = Mark::SectionEnd(k);
-            fill[b] += 1;
-        }
-        let mut guide_cables = vec![Vec::new(); robot.guides().len()];
-        for (j, c) in robot.cables().iter().enumerate() {
-            for (k, &g) in c.route.iter().enumerate() {
-                guide_cables[g].push((j, k));
-            }
-        }
-        let np = pieces.len();
-        let layout = Layout {
-            base_holes: robot
-                .cables()
-                .iter()
-                .map(|c| robot.base_position() + robot.base_rotation() * c.base_hole)
-                .collect(),
-            guide_mass: settings.guide_mass,
-            pieces,
-            marks: ordered,
-            mark_at: at,
-            guide_boundary,
-            guide_cables,
-            section_ends,
-            robot,
-        };
+        let layout = Layout::new(robot, &settings);
+        let np = layout.pieces.len();
         Ok(Self {
             b: Buf::new(&layout),
             f: vec![Vector3::zeros(); np],
@@ -322,6 +225,7 @@ impl PiecewiseConstantCurvature {
                 residual: f64::INFINITY,
             },
             sens: None,
+            kin: None,
             layout,
             settings,
         })
@@ -378,6 +282,41 @@ impl PiecewiseConstantCurvature {
         for (u, p) in self.b.u.iter_mut().zip(&self.layout.pieces) {
             *u = self.layout.robot.sections()[p.section].precurvature;
         }
+    }
+
+    /// Displacement actuation by the constant-curvature kinematics per section
+    /// (module `kinematics`; the proximal sections' path change of a distal tendon is
+    /// subtracted from its reading): every piece of section `k` takes section `k`'s
+    /// arc. Pure kinematics has nothing to say below a section, so the shape equals
+    /// [`ConstantCurvature::solve_readings`](super::ConstantCurvature::solve_readings)'s;
+    /// the pieces only resample it. Errors as there.
+    pub fn solve_readings(&mut self, readings_m: &[f64]) -> Result<LadderReport, LadderError> {
+        let mut kin = match self.kin.take() {
+            Some(k) => k,
+            None => TendonKinematics::new(&self.layout.robot)?,
+        };
+        let solved = kin.solve(readings_m);
+        let kin = self.kin.insert(kin);
+        solved?;
+        for (u, p) in self.b.u.iter_mut().zip(&self.layout.pieces) {
+            *u = kin.curvature(p.section);
+        }
+        self.layout.kinematics(&mut self.b);
+        for (j, l) in self.lengths.iter_mut().enumerate() {
+            *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
+        }
+        self.report = LadderReport {
+            status: SolveStatus::Converged,
+            iterations: 0,
+            residual: 0.0,
+        };
+        Ok(self.report)
+    }
+
+    /// The tendon kinematics of the last
+    /// [`PiecewiseConstantCurvature::solve_readings`]; `None` before the first.
+    pub fn kinematics(&self) -> Option<&TendonKinematics> {
+        self.kin.as_ref()
     }
 
     /// [`ForwardModel::solve`] for `loads` plus `theta_k` at `params[k]` (see
@@ -478,102 +417,6 @@ impl PiecewiseConstantCurvature {
             *l = *v;
         }
         imp.solve(out)
-    }
-}
-
-impl Layout {
-    /// Step 1 of a sweep: poses and holes from `b.u`.
-    fn kinematics<T: Real>(&self, b: &mut Buf<T>) {
-        for (i, p) in self.pieces.iter().enumerate() {
-            let s = b.bound[i];
-            b.mid[i] = arc_pose_t(&s, &b.u[i], 0.5 * p.h);
-            b.quarter[i] = arc_pose_t(&s, &b.u[i], 0.75 * p.h).position;
-            b.bound[i + 1] = arc_pose_t(&s, &b.u[i], p.h);
-        }
-        for (j, c) in self.robot.cables().iter().enumerate() {
-            for (k, &g) in c.route.iter().enumerate() {
-                let pose = &b.bound[self.guide_boundary[g]];
-                let hole = c.hole_local[k].map(T::cst);
-                b.hole_pts[j][k] = pose.position + pose.rotation * hole;
-            }
-        }
-    }
-
-    /// Steps 2-3: new curvatures into `b.u_new` at load scale `lam`; returns the
-    /// largest change times `L`.
-    fn moments<T: Real>(&self, b: &mut Buf<T>, lam: f64) -> f64 {
-        let g = b.loads.gravity * lam;
-        let gt = g.map(T::cst);
-        let secs = self.robot.sections();
-        let mut n = Vector3::<T>::zeros();
-        let mut m = Vector3::<T>::zeros();
-        let mut change: f64 = 0.0;
-        for i in (0..self.pieces.len()).rev() {
-            let bi = i + 1;
-            let rb = b.bound[bi].position;
-            // loads at boundary bi (distal end of piece i); m is about rb
-            for mark in &self.marks[self.mark_at[bi]..self.mark_at[bi + 1]] {
-                match *mark {
-                    Mark::SectionEnd(k) => {
-                        for p in b.loads.points.iter().filter(|p| p.section == k) {
-                            let rot = &b.bound[bi].rotation;
-                            let (f, t) = if p.body {
-                                (rot * p.force, rot * p.torque)
-                            } else {
-                                (p.force, p.torque)
-                            };
-                            n += f.map(|x| x.scale(lam)) + gt * p.mass;
-                            m += t.map(|x| x.scale(lam));
-                        }
-                    }
-                    Mark::Guide(gi) => {
-                        if self.guide_mass == GuideMass::Point {
-                            n += (g * self.robot.guides()[gi].mass).map(T::cst);
-                        }
-                        for &(j, k) in &self.guide_cables[gi] {
-                            let t = b.loads.tensions[j].scale(lam);
-                            if t == T::zero() {
-                                continue;
-                            }
-                            let pts = &b.hole_pts[j];
-                            let p = pts[k];
-                            let prev = if k == 0 {
-                                self.base_holes[j].map(T::cst)
-                            } else {
-                                pts[k - 1]
-                            };
-                            let mut f = unit_t(prev - p) * t;
-                            if k + 1 < pts.len() {
-                                f += unit_t(pts[k + 1] - p) * t;
-                            }
-                            n += f;
-                            m += (p - rb).cross(&f);
-                        }
-                    }
-                }
-            }
-            let piece = self.pieces[i];
-            let w = (g * (piece.lambda * piece.h)).map(T::cst);
-            let ra = b.bound[i].position;
-            let rm = b.mid[i].position;
-            // midpoint moment: transport from rb plus the distal half's weight
-            let c_half = (rm + b.quarter[i].map(|x| x.scale(4.0)) + rb).map(|x| x.scale(1.0 / 6.0));
-            let m_mid = m + (rb - rm).cross(&n) + (c_half - rm).cross(&w.map(|x| x.scale(0.5)));
-            let sec = &secs[piece.section];
-            let ml = b.mid[i].rotation.transpose() * m_mid;
-            let stiff = &sec.stiffness.bend_twist;
-            let pre = &sec.precurvature;
-            let u = Vector3::from_fn(|a, _| ml[a].scale(1.0 / stiff[a]) + T::cst(pre[a]));
-            for a in 0..3 {
-                change = change.max((u[a].re() - b.u[i][a].re()).abs());
-            }
-            b.u_new[i] = u;
-            // transport (n, m) to the piece's start
-            let c = (ra + rm.map(|x| x.scale(4.0)) + rb).map(|x| x.scale(1.0 / 6.0));
-            m += (rb - ra).cross(&n) + (c - ra).cross(&w);
-            n += w;
-        }
-        change * self.robot.length()
     }
 }
 

@@ -1,0 +1,155 @@
+//! Every rung driven by actuator readings of displacement-driven tendons.
+//!
+//! [`ReadingsModel`] is the readings-side twin of [`super::ForwardModel`]: readings
+//! (m, one per displacement-driven tendon in cable order, positive = pulled) in, tip
+//! and cable lengths out. The curvature rungs answer with the constant-curvature
+//! kinematics (module `kinematics`, Webster & Jones 2010: no mechanics, no loads, one
+//! arc per section); the rod rungs with [`TendonWorkspace`] (tendon stretch,
+//! pretension, slack and the scene's loads, solved through the shooting model with the
+//! rung's [`SolverSettings`]).
+//!
+//! The automatic choice ([`super::choose`]) probes *loads*, not readings, so it does not
+//! rank these models; `cablesense pareto` does (its TDCR rows, module
+//! `crate::experiments`).
+
+use super::{CcSettings, ConstantCurvature, LadderError, LadderReport, PccSettings};
+use super::{PiecewiseConstantCurvature, Rung};
+use crate::loads::Loads;
+use crate::robot::Robot;
+use crate::statics::Start;
+use crate::tendons::TendonWorkspace;
+use nalgebra::Vector3;
+
+/// A model of a fixed robot driven by tendon readings.
+pub trait ReadingsModel {
+    /// Solve for `readings_m`; `Start::Warm` from the previous solve where the model
+    /// iterates (rod rungs), ignored by the closed-form kinematics.
+    fn solve_readings(
+        &mut self,
+        readings_m: &[f64],
+        start: Start,
+    ) -> Result<LadderReport, LadderError>;
+    /// Tip position of the last solve (m, world).
+    fn tip_position(&self) -> Vector3<f64>;
+    /// Cable lengths of the last solve (m, every cable) into `out`.
+    fn cable_lengths_into(&self, out: &mut [f64]);
+    /// Whether each driven tendon was taut in the last solve (reading order).
+    fn taut(&self) -> Vec<bool>;
+}
+
+impl ReadingsModel for ConstantCurvature {
+    fn solve_readings(&mut self, q: &[f64], _: Start) -> Result<LadderReport, LadderError> {
+        ConstantCurvature::solve_readings(self, q)
+    }
+    fn tip_position(&self) -> Vector3<f64> {
+        super::ForwardModel::tip_position(self)
+    }
+    fn cable_lengths_into(&self, out: &mut [f64]) {
+        super::ForwardModel::cable_lengths_into(self, out)
+    }
+    fn taut(&self) -> Vec<bool> {
+        self.kinematics().map_or(Vec::new(), |k| k.taut().to_vec())
+    }
+}
+
+impl ReadingsModel for PiecewiseConstantCurvature {
+    fn solve_readings(&mut self, q: &[f64], _: Start) -> Result<LadderReport, LadderError> {
+        PiecewiseConstantCurvature::solve_readings(self, q)
+    }
+    fn tip_position(&self) -> Vector3<f64> {
+        super::ForwardModel::tip_position(self)
+    }
+    fn cable_lengths_into(&self, out: &mut [f64]) {
+        super::ForwardModel::cable_lengths_into(self, out)
+    }
+    fn taut(&self) -> Vec<bool> {
+        self.kinematics().map_or(Vec::new(), |k| k.taut().to_vec())
+    }
+}
+
+impl ReadingsModel for TendonWorkspace {
+    fn solve_readings(&mut self, q: &[f64], start: Start) -> Result<LadderReport, LadderError> {
+        let rep = self.solve_readings_from(q, start)?;
+        Ok(LadderReport {
+            status: rep.status,
+            iterations: rep.iterations,
+            // the tendon mismatch (m) scaled by the rod length, as the ladder's residuals
+            residual: rep.residual_m / self.workspace().robot().length(),
+        })
+    }
+    fn tip_position(&self) -> Vector3<f64> {
+        TendonWorkspace::tip_position(self)
+    }
+    fn cable_lengths_into(&self, out: &mut [f64]) {
+        for (o, l) in out.iter_mut().zip(self.lengths()) {
+            *o = *l;
+        }
+    }
+    fn taut(&self) -> Vec<bool> {
+        TendonWorkspace::taut(self).to_vec()
+    }
+}
+
+impl Rung {
+    /// Build the rung as a [`ReadingsModel`] of `robot` under `loads` (the rod rungs'
+    /// [`TendonWorkspace`] fixes each tendon's free length at the pretension under
+    /// these loads; the kinematics ignores them). An error when no tendon is
+    /// displacement-driven or the loads tension a displacement-driven tendon.
+    pub fn build_readings(
+        &self,
+        robot: &Robot,
+        loads: &Loads,
+    ) -> Result<Box<dyn ReadingsModel>, LadderError> {
+        Ok(match self {
+            Self::ConstantCurvature(s) => {
+                let mut m = ConstantCurvature::new(robot.clone(), *s)?;
+                // fail here, not at the first solve, when there is nothing to drive
+                m.solve_readings(&zeros(robot))?;
+                Box::new(m)
+            }
+            Self::PiecewiseConstantCurvature(s) => {
+                let mut m = PiecewiseConstantCurvature::new(robot.clone(), *s)?;
+                m.solve_readings(&zeros(robot))?;
+                Box::new(m)
+            }
+            Self::Rod(s) => Box::new(TendonWorkspace::new(
+                robot.clone(),
+                loads.clone(),
+                s.clone(),
+            )?),
+        })
+    }
+}
+
+/// Zero readings (the tendons' zero offsets) for every displacement-driven tendon.
+fn zeros(robot: &Robot) -> Vec<f64> {
+    robot
+        .cables()
+        .iter()
+        .filter(|c| c.actuation == crate::tendons::Actuation::Displacement)
+        .map(|c| c.mechanics.map_or(0.0, |m| m.zero_offset_m))
+        .collect()
+}
+
+/// The readings ladder of a TDCR: CC and PCC (4, 16 pieces per section) by the
+/// kinematics (label `pcc/none/N`: the kinematics has no mass), and every rod
+/// setting of [`super::auto_ladder`] (RK4 4..64 steps per section and adaptive 1e-8,
+/// each guide-mass model) through the tendon solve: a tendon solve is a Newton
+/// iteration of shooting solves, so the finer adaptive settings of the full ladder
+/// would dominate the sweep's time without adding a point to the front.
+pub fn readings_ladder(robot: &Robot) -> Vec<Rung> {
+    let mut out = vec![Rung::ConstantCurvature(CcSettings::default())];
+    for pieces in [4, 16] {
+        out.push(Rung::PiecewiseConstantCurvature(PccSettings {
+            pieces_per_section: pieces,
+            guide_mass: crate::settings::GuideMass::None,
+            ..PccSettings::default()
+        }));
+    }
+    out.extend(
+        super::auto_ladder(robot)
+            .into_iter()
+            .filter(|r| matches!(r, Rung::Rod(_))),
+    );
+    out
+}
