@@ -691,6 +691,22 @@ fn accurate_guide_mass_for_thin_disks() {
     );
 }
 
+/// A disk of zero thickness under `GuideMass::Accurate` is the limit h -> 0 of the
+/// test above: its mass is a point mass (it was dropped before: 5.8 mm of tip on
+/// tdcr_two_segment). Same state as `Point`, to 1e-12 m.
+#[test]
+fn accurate_guide_mass_of_zero_thickness_disks_is_a_point_mass() {
+    let robot = guided_rod(5, 5.0 * 2.2e-3, 0.0);
+    let acc = tip_with(&robot, GuideMass::Accurate);
+    let pt = tip_with(&robot, GuideMass::Point);
+    let none = tip_with(&robot, GuideMass::None);
+    assert!(
+        (acc - pt).norm() < 1e-12,
+        "accurate {acc:?} vs point {pt:?}"
+    );
+    assert!((acc - none).norm() > 1e-4, "the disks' weight is missing");
+}
+
 /// A point load's payload mass is a dead load m g at the section end: same shape as an
 /// explicit force m g (exact: both enter as n+ = n- - F). Tolerance 1e-14 m.
 #[test]

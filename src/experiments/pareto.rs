@@ -346,23 +346,10 @@ pub fn thesis_table_for(scene_path: &Path) -> Result<Option<TableData>, Experime
     Ok(Some(TableData::load_from(&src, t)?))
 }
 
-/// The reference of the experiments on `robot`: [`Rung::reference`], with point guide
-/// masses instead of accurate ones when a disk with mass has zero thickness (the
-/// accurate model spreads a disk's mass over its thickness, thesis 3.8, and drops a
-/// zero-thickness disk's mass altogether: 5.8 mm of tip error on
-/// `tdcr_two_segment.toml`; a point mass is that model's zero-thickness limit).
-pub fn reference_for(robot: &Robot) -> Rung {
-    let thin = robot
-        .guides()
-        .iter()
-        .any(|g| g.mass > 0.0 && g.thickness <= 0.0);
-    match Rung::reference() {
-        Rung::Rod(mut s) if thin => {
-            s.guide_mass = crate::settings::GuideMass::Point;
-            Rung::Rod(s)
-        }
-        r => r,
-    }
+/// The reference of the experiments on `robot`: [`Rung::reference`] (a disk of zero
+/// thickness under the accurate guide-mass model is a point mass, its limit).
+pub fn reference_for(_robot: &Robot) -> Rung {
+    Rung::reference()
 }
 
 /// Whether `robot` is driven by readings (any displacement-driven tendon): then

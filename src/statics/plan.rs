@@ -98,7 +98,9 @@ pub(crate) struct Plan {
     pub cables: Vec<PlanCable>,
     /// `(cable, route position)` of each guide.
     pub guide_cables: Vec<Vec<(usize, usize)>>,
+    /// Mass (kg) applied as a point at each guide's event (see `Plan::new`).
     pub guide_mass: Vec<f64>,
+    /// Some guide mass is applied as a point.
     pub point_guides: bool,
     pub base_r: Vector3<f64>,
     pub base_rot: Matrix3<f64>,
@@ -331,8 +333,20 @@ impl Plan {
             points: Vec::new(),
             cables,
             guide_cables,
-            guide_mass: robot.guides().iter().map(|g| g.mass).collect(),
-            point_guides: settings.guide_mass == GuideMass::Point,
+            // masses applied as points at the guide events: every disk under the
+            // point model; under the accurate model a disk of zero thickness (its
+            // distributed band would be empty: the limit is a point mass)
+            guide_mass: robot
+                .guides()
+                .iter()
+                .map(|g| match settings.guide_mass {
+                    GuideMass::Point => g.mass,
+                    GuideMass::Accurate if g.thickness <= 0.0 => g.mass,
+                    _ => 0.0,
+                })
+                .collect(),
+            point_guides: robot.guides().iter().any(|g| g.mass > 0.0)
+                && matches!(settings.guide_mass, GuideMass::Point | GuideMass::Accurate),
             base_r: *robot.base_position(),
             base_rot: *robot.base_rotation(),
             closed_form,

@@ -54,8 +54,13 @@ impl Layout {
                         }
                     }
                     Mark::Guide(gi) => {
-                        if self.guide_mass == GuideMass::Point {
-                            n += (g * self.robot.guides()[gi].mass).map(T::cst);
+                        // a point mass under the point model, and under the accurate
+                        // one for a disk of zero thickness (its limit; statics::plan)
+                        let guide = &self.robot.guides()[gi];
+                        if self.guide_mass == GuideMass::Point
+                            || (self.guide_mass == GuideMass::Accurate && guide.thickness <= 0.0)
+                        {
+                            n += (g * guide.mass).map(T::cst);
                         }
                         for &(j, k) in &self.guide_cables[gi] {
                             let t = b.loads.tensions[j].scale(lam);
