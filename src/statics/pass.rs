@@ -596,6 +596,12 @@ fn settle_segment<T: Real>(
     };
     let stagnated = worst <= floor * plan.length && worst > 0.5 * ck.last_error;
     if worst <= buf.local_tol * plan.length || stagnated {
+        if ck.iterations > 1 && buf.mlin_valid {
+            // keep the Broyden-improved M for the next pass (rows between sweeps
+            // otherwise start every segment from the last sweep's stale M)
+            let h = &buf.settle_h[..l * l];
+            buf.mlin[ck.g][..l * l].copy_from_slice(h);
+        }
         return true;
     }
     ck.last_error = worst;
