@@ -44,11 +44,11 @@ const BIN: &str = env!("CARGO_BIN_EXE_cablesense");
 /// Tip agreement (m) of good rows after a fallback, on the track demo. Its forward
 /// solves stop at a scaled residual of 1e-7 (`[numerics] tolerance`), so two warm
 /// starts of one row may end 1e-7 apart in scaled force, about 1e-7 of the 0.39 m rod
-/// at its tip: measured 9.4e-8 m over a million rows (2.1e-11 m over the first
+/// at its tip: measured 1.02e-7 m over a million rows (2.1e-11 m over the first
 /// 20 000). Not within 1e-12 m: the estimator's warm state is not rolled back.
 const TRACK_TIP_TOL_M: f64 = 1e-6;
 /// Agreement (N) of the track demo's estimated forces after a fallback: its estimate
-/// standard deviation is 2e-4 N; measured: see `benches/README.md`.
+/// standard deviation is 2e-4 N; measured 1.14e-7 N over a million rows.
 const TRACK_VALUE_TOL_N: f64 = 1e-5;
 /// Tip agreement (m) on the two-segment TDCR (forward tolerance 1e-10, tendon
 /// residual tolerance in metres): measured 3.3e-14 m, within the 1e-12 m asked for.
@@ -493,7 +493,7 @@ fn cable_deltas_20k_rows_with_faults() {
 
 /// The full soak: `cargo test --release --test soak_faults -- --ignored --nocapture`.
 #[test]
-#[ignore = "a million rows: about 10 minutes on 2 shared cores; figures in benches/README.md"]
+#[ignore = "a million rows: 18 minutes on 2 busy shared cores; figures in benches/README.md"]
 fn cable_deltas_million_rows_with_faults() {
     soak(
         "data/scenes/track_demo.toml",
