@@ -163,7 +163,17 @@ impl ReadingsParser {
                 ));
             }
             self.names = cells.iter().map(|c| c.to_string()).collect();
-            self.header = Some(cols);
+            let restart = self.header.replace(cols).is_some();
+            if restart {
+                // a header mid-stream (two recordings joined, a logger restarted):
+                // its columns are used from here on, and the line is reported, so no
+                // row is silently read differently from the one before
+                return Err(Self::err(
+                    line_no,
+                    "header",
+                    "a new header mid-stream: the columns are read from it from here on",
+                ));
+            }
             return Ok(None);
         }
         let cols = self.header.as_ref().expect("header checked above");
@@ -294,6 +304,11 @@ mod tests {
         assert!(e.why.contains("cells"), "{e}");
         // the stream goes on
         assert!(p.line(6, "0.8,x,2,2").unwrap().is_some());
+        // a header mid-stream is reported, and its columns are used from then on
+        let e = p.line(7, "b_mm,t_s,a_mm").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (7, "header"));
+        let r = p.line(8, "3,0.9,4").unwrap().unwrap();
+        assert_eq!(r.readings_m, vec![4e-3, 3e-3]);
     }
 
     #[test]

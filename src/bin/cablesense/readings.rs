@@ -116,6 +116,8 @@ pub fn stream(
         writeln!(w, "line,s_m,x_m,y_m,z_m")?;
     }
     let (mut solved, mut converged, mut bad) = (0, 0, 0);
+    // readings of the last converged row (`have_good`), the fallback warm start
+    let (mut last_good, mut have_good) = (Vec::new(), false);
     for (i, line) in reader.lines().enumerate() {
         let line = match line {
             Ok(l) => l,
@@ -146,8 +148,15 @@ pub fn stream(
         let elapsed = t0.elapsed().as_secs_f64();
         solved += 1;
         converged += usize::from(rep.status.is_converged());
+        // a row that did not converge must not become the next row's warm start:
+        // after printing it, the last converged row is solved again (warm from here)
+        let fallback = !rep.status.is_converged() && have_good;
         match output {
-            Output::Json => writeln!(out, "{}", row_json(&ws, &row, &rep, elapsed))?,
+            Output::Json => {
+                let mut record = row_json(&ws, &row, &rep, elapsed);
+                record["fallback"] = json!(fallback);
+                writeln!(out, "{record}")?
+            }
             Output::Text => writeln!(out, "{}", row_text(&ws, &row, &rep))?,
         }
         if let Some(w) = samples.as_deref_mut() {
@@ -155,6 +164,14 @@ pub fn stream(
             for s in &sol.samples {
                 writeln!(w, "{},{},{},{},{}", row.line, s.s, s.r.x, s.r.y, s.r.z)?;
             }
+        }
+        if rep.status.is_converged() {
+            last_good.clear();
+            last_good.extend_from_slice(&row.readings_m);
+            have_good = true;
+        } else if have_good {
+            // restore the last good state (its status is not reported: the next row's is)
+            let _ = ws.solve_readings(&last_good);
         }
         out.flush()?;
     }

@@ -60,6 +60,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         None => Box::new(std::io::BufReader::new(std::io::stdin())),
     };
     let mut tips = Vec::new();
+    let mut start = est.theta().to_vec();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     for (i, line) in reader.lines().enumerate() {
@@ -77,8 +78,18 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         match p.line(i + 1, &line) {
             Ok(None) => {}
             Ok(Some(s)) => {
+                start.copy_from_slice(est.theta());
                 let e = process(&mut est, &s);
-                writeln!(out, "{}", estimate_json(&s, &e))?;
+                // a row that stalls, fails or fits poorly must not become the next
+                // row's warm start: fall back to the estimate this row started from
+                // (the last good one); `"fallback": true` says so
+                let fallback = poisons_warm_start(&e);
+                if fallback {
+                    est.set_theta(&start);
+                }
+                let mut record = estimate_json(&s, &e);
+                record["fallback"] = serde_json::json!(fallback);
+                writeln!(out, "{record}")?;
                 if a.plot.is_some() && e.status != cablesense::estimate::EstimateStatus::NoData {
                     tips.push(e.tip.position);
                 }
@@ -97,4 +108,17 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         crate::plot_track::write(dir, &scene_path, &mut est, tips)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Whether an estimate must not warm-start the next row: the solver stalled or the
+/// forward model failed (the README: "not trusted"), or the fit is poor (the data
+/// contradict the model: a corrupted reading). `max_iterations` and `time_budget`
+/// estimates are the best so far and stay the warm start (a control loop with a
+/// tight budget would otherwise never move); `no_data` keeps the previous estimate.
+fn poisons_warm_start(e: &cablesense::estimate::Estimate) -> bool {
+    use cablesense::estimate::{EstimateStatus, Fit};
+    matches!(
+        e.status,
+        EstimateStatus::Stalled | EstimateStatus::ForwardFailed
+    ) || e.fit == Fit::Poor
 }

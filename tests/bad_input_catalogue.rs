@@ -1,0 +1,794 @@
+//! Catalogue of bad inputs (issue 14, "Reliability for a control loop"): scene files,
+//! encoder rows, servo-readings rows, calibration recordings and command-line
+//! arguments, each run through the `cablesense` binary
+//! (`env!("CARGO_BIN_EXE_cablesense")`). Every case asserts that
+//! - the process neither panics nor aborts (no `panicked` on stderr, an exit code),
+//! - the error names where the input is wrong: the field path, the line, the column
+//!   or the value (the strings each case lists), and
+//! - the exit code is the documented one: 2 for an input that stops the command, 1
+//!   for a fatal stream header or a solve that fails, 0 for a stream whose bad rows
+//!   are reported in line and the stream goes on.
+//!
+//! Tolerance: none; every assertion is an exact substring or an exact exit code. Source:
+//! the README's "Scene files", "Tendon-driven robots" (readings files), "Output of
+//! `solve --json`" (track rows) and "Calibration from a recording" sections.
+//! (The Python and C bindings' bad inputs are covered by their own tests.)
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+const BIN: &str = env!("CARGO_BIN_EXE_cablesense");
+
+/// A fresh, empty directory under the system temp dir (removed on drop).
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> Self {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let dir = std::env::temp_dir().join(format!(
+            "cablesense-bad-{tag}-{}-{}",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+    /// Write `text` to `name` in the directory; its path.
+    fn file(&self, name: &str, text: &str) -> String {
+        let p = self.0.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.display().to_string()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// What one run of the binary gave.
+struct Run {
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+/// Run the binary with `args` (and `stdin` when given), in the crate root.
+fn run_with(args: &[&str], stdin: Option<&str>) -> Run {
+    let mut cmd = Command::new(BIN);
+    cmd.args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .stdin(if stdin.is_some() {
+            Stdio::piped()
+        } else {
+            Stdio::null()
+        });
+    let mut child = cmd.spawn().expect("the binary starts");
+    if let Some(text) = stdin {
+        use std::io::Write;
+        let mut pipe = child.stdin.take().unwrap();
+        pipe.write_all(text.as_bytes()).unwrap();
+    }
+    let Output {
+        status,
+        stdout,
+        stderr,
+    } = child.wait_with_output().unwrap();
+    let run = Run {
+        code: status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&stderr).into_owned(),
+    };
+    assert!(
+        !run.stderr.contains("panicked") && !run.stdout.contains("panicked"),
+        "{args:?} panicked:\n{}",
+        run.stderr
+    );
+    assert_ne!(run.code, -1, "{args:?} was killed by a signal");
+    assert!(
+        run.code != 101,
+        "{args:?} exit code 101 (a panic):\n{}",
+        run.stderr
+    );
+    run
+}
+
+fn run(args: &[&str]) -> Run {
+    run_with(args, None)
+}
+
+/// The command stopped with exit code 2 and an error naming every part.
+#[track_caller]
+fn assert_error(r: &Run, parts: &[&str]) {
+    assert_eq!(
+        r.code, 2,
+        "exit code {} (stdout {}, stderr {})",
+        r.code, r.stdout, r.stderr
+    );
+    assert!(
+        r.stderr.starts_with("error: "),
+        "no error line:\n{}",
+        r.stderr
+    );
+    for p in parts {
+        assert!(
+            r.stderr.contains(p),
+            "the error does not name `{p}`:\n{}",
+            r.stderr
+        );
+    }
+}
+
+fn repo(path: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(path)
+        .display()
+        .to_string()
+}
+
+fn shipped(path: &str) -> String {
+    std::fs::read_to_string(repo(path)).unwrap()
+}
+
+/// A shipped scene with the first occurrence of `old` replaced (it must occur).
+fn scene_with(scene: &str, old: &str, new: &str) -> String {
+    let text = shipped(scene);
+    assert!(text.contains(old), "`{old}` not in {scene}");
+    text.replacen(old, new, 1)
+}
+
+const TDCR: &str = "data/scenes/tdcr_two_segment.toml";
+const DEMO: &str = "data/scenes/demo_two_section.toml";
+const TRACK: &str = "data/scenes/track_demo.toml";
+const CALIB: &str = "data/calibration/demo.toml";
+
+/// `solve` on a scene file written from `text`.
+fn solve_scene(tag: &str, name: &str, text: &str) -> Run {
+    let dir = TempDir::new(tag);
+    let path = dir.file(name, text);
+    run(&["solve", &path])
+}
+
+// ---------------------------------------------------------------------------------
+// Scene files
+// ---------------------------------------------------------------------------------
+
+#[test]
+fn scene_negative_length_names_field_and_value() {
+    let r = solve_scene(
+        "neglen",
+        "s.toml",
+        &scene_with(TDCR, "length_m = 0.1", "length_m = -0.1"),
+    );
+    assert_error(&r, &["s.toml", "robot.sections[0].length_m", "-0.1"]);
+}
+
+#[test]
+fn scene_nan_modulus_names_field_and_value() {
+    let r = solve_scene(
+        "nanE",
+        "s.toml",
+        &scene_with(
+            TDCR,
+            "youngs_modulus_pa = 60.0e9",
+            "youngs_modulus_pa = nan",
+        ),
+    );
+    assert_error(&r, &["robot.sections[0].youngs_modulus_pa", "NaN"]);
+}
+
+#[test]
+fn scene_infinite_gravity_names_field_and_value() {
+    let r = solve_scene(
+        "infg",
+        "s.toml",
+        &scene_with(
+            DEMO,
+            "gravity_m_s2 = [0.0, -9.81, 0.0]",
+            "gravity_m_s2 = [0.0, -inf, 0.0]",
+        ),
+    );
+    assert_error(&r, &["gravity_m_s2", "inf"]);
+}
+
+#[test]
+fn scene_displacement_tendon_without_stiffness_names_the_cable() {
+    let r = solve_scene(
+        "noEA",
+        "s.toml",
+        &scene_with(TDCR, "stiffness_n = 2.0e4", "# no stiffness"),
+    );
+    assert_error(&r, &["robot.cables[0].tendon.stiffness_n", "EA_t"]);
+}
+
+#[test]
+fn scene_negative_tendon_stiffness_names_field_and_value() {
+    let r = solve_scene(
+        "negEA",
+        "s.toml",
+        &scene_with(TDCR, "stiffness_n = 2.0e4", "stiffness_n = -5.0"),
+    );
+    assert_error(&r, &["robot.tendons.stiffness_n", "-5"]);
+}
+
+#[test]
+fn scene_negative_pretension_names_field_and_value() {
+    let r = solve_scene(
+        "negpre",
+        "s.toml",
+        &scene_with(TDCR, "pretension_n = 1.0", "pretension_n = -1.0"),
+    );
+    assert_error(&r, &["robot.tendons.pretension_n", "-1"]);
+}
+
+#[test]
+fn scene_routing_hole_outside_its_disk_names_cable_and_disk() {
+    let r = solve_scene(
+        "hole",
+        "s.toml",
+        &scene_with(
+            TDCR,
+            "radius_m = 0.008, angle_deg = 120.0",
+            "radius_m = 0.015, angle_deg = 120.0",
+        ),
+    );
+    assert_error(
+        &r,
+        &[
+            "robot.cables[1].routing.radius_m",
+            "0.015",
+            "disk 0 of section 0",
+        ],
+    );
+}
+
+#[test]
+fn scene_guide_outside_its_section_names_guide_and_section() {
+    let r = solve_scene(
+        "guide",
+        "s.toml",
+        &scene_with(TDCR, "first_offset_m = 0.01", "first_offset_m = 0.2"),
+    );
+    assert_error(&r, &["guide 0 of section 0", "0.2", "outside the section"]);
+}
+
+#[test]
+fn scene_negative_tension_names_field_and_value() {
+    let r = solve_scene(
+        "negT",
+        "s.toml",
+        &scene_with(DEMO, "tensions_n = [1.5,", "tensions_n = [-1.5,"),
+    );
+    assert_error(&r, &["loads.tensions_n[0]", "-1.5"]);
+}
+
+#[test]
+fn scene_cable_end_section_past_the_robot_names_field_and_value() {
+    let r = solve_scene(
+        "endsec",
+        "s.toml",
+        &scene_with(TDCR, "end_section = 1", "end_section = 5"),
+    );
+    assert_error(&r, &["end_section", "5"]);
+}
+
+#[test]
+fn scene_zero_rk4_steps_names_field_and_value() {
+    let r = solve_scene(
+        "rk4",
+        "s.toml",
+        &scene_with(TDCR, "steps_per_section = 20", "steps_per_section = 0"),
+    );
+    assert_error(&r, &["numerics.integrator.rk4.steps_per_section", "0"]);
+}
+
+#[test]
+fn scene_misspelt_key_names_key_line_and_column() {
+    let r = solve_scene(
+        "typo",
+        "s.toml",
+        &scene_with(TDCR, "poisson_ratio = 0.3", "poison_ratio = 0.3"),
+    );
+    assert_error(&r, &["line 7, column 1", "poison_ratio"]);
+}
+
+#[test]
+fn scene_toml_syntax_error_names_line_and_column() {
+    let r = solve_scene(
+        "syntax",
+        "s.toml",
+        &scene_with(TDCR, "count = 10", "count = = 10"),
+    );
+    assert_error(&r, &["line 11, column 9"]);
+}
+
+#[test]
+fn scene_json_syntax_error_names_line_and_column() {
+    let r = solve_scene(
+        "json",
+        "s.json",
+        "{\"robot\": {\"sections\": [ {\"length_m\": 0.1,, }]}}",
+    );
+    assert_error(&r, &["s.json", "line 1 column 43"]);
+}
+
+#[test]
+fn scene_json_wrong_type_names_the_value() {
+    let r = solve_scene(
+        "jsontype",
+        "s.json",
+        "{\"robot\": {\"sections\": [{\"length_m\": \"long\"}]}}",
+    );
+    assert_error(&r, &["s.json", "\"long\"", "line 1"]);
+}
+
+#[test]
+fn scene_missing_file_names_the_path() {
+    let r = run(&["solve", "no/such/scene.toml"]);
+    assert_error(&r, &["no/such/scene.toml"]);
+}
+
+#[test]
+fn scene_unknown_demo_names_it() {
+    let r = run(&["solve", "demo:scenes/nope.toml"]);
+    assert_error(&r, &["demo:scenes/nope.toml", "demo list"]);
+}
+
+/// A load the solver cannot reach (a 15 kN cable pull on the 1.56 mm demo rod):
+/// `solve` reports a failure status and exits 1; nothing claims convergence.
+#[test]
+fn scene_unreachable_load_reports_a_failure_status() {
+    let r = solve_scene(
+        "huge",
+        "s.toml",
+        &scene_with(DEMO, "tensions_n = [1.5,", "tensions_n = [1.5e4,"),
+    );
+    assert_eq!(r.code, 1, "stdout {} stderr {}", r.stdout, r.stderr);
+    let status = r
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("status:"))
+        .unwrap_or_else(|| panic!("no status line:\n{}", r.stdout));
+    assert!(!status.contains("Converged"), "{status}");
+    assert!(
+        [
+            "NonFinite",
+            "Stalled",
+            "MaxIterations",
+            "IllConditioned",
+            "Unstable"
+        ]
+        .iter()
+        .any(|s| status.contains(s)),
+        "{status}"
+    );
+}
+
+// ---------------------------------------------------------------------------------
+// Encoder rows (`track` on the track demo: cables top, left, right)
+// ---------------------------------------------------------------------------------
+
+/// `track` of the track demo on `rows` from stdin; the JSON objects of stdout.
+fn track_rows(rows: &str) -> (Run, Vec<serde_json::Value>) {
+    let r = run_with(&["track", &repo(TRACK)], Some(rows));
+    let lines = r
+        .stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    (r, lines)
+}
+
+/// The error object for input line `line` names `field` and contains `parts`.
+#[track_caller]
+fn assert_row_error(rows: &[serde_json::Value], line: u64, field: &str, parts: &[&str]) {
+    let row = rows
+        .iter()
+        .find(|r| r["line"] == line)
+        .unwrap_or_else(|| panic!("no output for line {line}: {rows:?}"));
+    let error = row["error"]
+        .as_str()
+        .unwrap_or_else(|| panic!("line {line} is not an error: {row}"));
+    assert_eq!(row["field"], field, "{row}");
+    for p in parts {
+        assert!(error.contains(p), "line {line}: `{p}` not in `{error}`");
+    }
+}
+
+const ENC_HEADER: &str = "t_s,top,left,right\n";
+const ENC_GOOD: &str = "0.0,1.66819249e-3,-2.44597466e-3,2.51324066e-4\n";
+
+/// The stream goes on: the good row after the bad one is estimated.
+#[track_caller]
+fn assert_good_row(rows: &[serde_json::Value], line: u64) {
+    let row = rows
+        .iter()
+        .find(|r| r["line"] == line)
+        .unwrap_or_else(|| panic!("no output for line {line}: {rows:?}"));
+    assert_eq!(row["status"], "converged", "{row}");
+}
+
+#[test]
+fn encoder_nan_cell_names_line_and_cable() {
+    let (r, rows) = track_rows(&format!("{ENC_HEADER}0.0,NaN,0,0\n{ENC_GOOD}"));
+    assert_eq!(r.code, 0);
+    assert_row_error(&rows, 2, "top", &["line 2", "`NaN` is not finite"]);
+    assert_good_row(&rows, 3);
+}
+
+#[test]
+fn encoder_infinite_cell_names_line_and_cable() {
+    let (r, rows) = track_rows(&format!("{ENC_HEADER}0.0,0,-inf,0\n{ENC_GOOD}"));
+    assert_eq!(r.code, 0);
+    assert_row_error(&rows, 2, "left", &["`-inf` is not finite"]);
+    assert_good_row(&rows, 3);
+}
+
+#[test]
+fn encoder_garbage_cell_names_line_cable_and_value() {
+    let (r, rows) = track_rows(&format!("{ENC_HEADER}0.0,0,0,0x1F\n{ENC_GOOD}"));
+    assert_eq!(r.code, 0);
+    assert_row_error(&rows, 2, "right", &["`0x1F` is not a number"]);
+    assert_good_row(&rows, 3);
+}
+
+#[test]
+fn encoder_missing_and_extra_columns_name_the_count() {
+    let (r, rows) = track_rows(&format!("{ENC_HEADER}0.0,0,0\n0.1,0,0,0,0\n{ENC_GOOD}"));
+    assert_eq!(r.code, 0);
+    assert_row_error(&rows, 2, "row", &["3 cells, header has 4"]);
+    assert_row_error(&rows, 3, "row", &["5 cells, header has 4"]);
+    assert_good_row(&rows, 4);
+}
+
+#[test]
+fn encoder_empty_time_stamp_names_the_column() {
+    let (_, rows) = track_rows(&format!("{ENC_HEADER},0,0,0\n{ENC_GOOD}"));
+    assert_row_error(&rows, 2, "t_s", &["empty time stamp"]);
+}
+
+#[test]
+fn encoder_non_positive_noise_names_column_and_value() {
+    let (_, rows) = track_rows("t_s,top,left,right,sigma_left\n0.0,0,0,0,-1e-5\n");
+    assert_row_error(&rows, 2, "sigma_left", &["-0.00001"]);
+}
+
+#[test]
+fn encoder_unknown_header_stops_the_stream_naming_the_column() {
+    let (r, rows) = track_rows(&format!("t_s,top,left,bogus\n{ENC_GOOD}"));
+    assert_eq!(r.code, 1, "a bad header is fatal: {}", r.stderr);
+    assert!(r.stderr.contains("header `bogus`"), "{}", r.stderr);
+    assert_eq!(rows.len(), 1, "reported once: {rows:?}");
+    assert_eq!(rows[0]["fatal"], true);
+}
+
+#[test]
+fn encoder_json_line_with_wrong_count_names_the_field() {
+    let (r, rows) = track_rows(
+        "{\"t_s\": 0, \"changes_m\": [0, 0]}\n{\"t_s\": 0.1, \"changes_m\": [1.67e-3, -2.45e-3, 2.5e-4]}\n",
+    );
+    assert_eq!(r.code, 0);
+    assert_row_error(&rows, 1, "changes_m", &["2 values for 3 cables"]);
+    assert_good_row(&rows, 2);
+}
+
+#[test]
+fn encoder_json_line_with_unknown_key_names_key_and_column() {
+    let (_, rows) = track_rows("{\"t_s\": 0, \"changes_m\": [0, 0, 0], \"extra\": 1}\n");
+    assert_row_error(&rows, 1, "json", &["unknown field `extra`", "column 42"]);
+}
+
+#[test]
+fn encoder_json_garbage_names_line_and_column() {
+    let (_, rows) = track_rows("{not json at all\n");
+    assert_row_error(&rows, 1, "json", &["line 1 column 2"]);
+}
+
+#[test]
+fn encoder_json_negative_noise_names_index_and_value() {
+    let (_, rows) =
+        track_rows("{\"t_s\": 0, \"changes_m\": [0, 0, 0], \"sigma_m\": [null, -1, null]}\n");
+    assert_row_error(&rows, 1, "sigma_m[1]", &["got -1"]);
+}
+
+// ---------------------------------------------------------------------------------
+// Servo-readings rows (`track` on the two-segment TDCR: tendons s1a..s2c)
+// ---------------------------------------------------------------------------------
+
+const RD_HEADER: &str = "t_s,s1a,s1b,s1c,s2a,s2b,s2c\n";
+
+fn readings_rows(rows: &str) -> (Run, Vec<serde_json::Value>) {
+    let r = run_with(&["track", &repo(TDCR)], Some(rows));
+    assert_eq!(r.code, 0, "a readings stream goes on: {}", r.stderr);
+    let lines = r
+        .stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    (r, lines)
+}
+
+#[test]
+fn readings_nan_and_inf_name_line_and_tendon() {
+    let (_, rows) = readings_rows(&format!(
+        "{RD_HEADER}0,0,NaN,0,0,0,0\n0.1,0,0,0,0,inf,0\n0.2,0.001,0,0,0,0,0\n"
+    ));
+    assert_row_error(&rows, 2, "s1b", &["`NaN` is not finite"]);
+    assert_row_error(&rows, 3, "s2b", &["`inf` is not finite"]);
+    assert_good_row(&rows, 4);
+}
+
+#[test]
+fn readings_garbage_cell_names_line_tendon_and_value() {
+    let (_, rows) = readings_rows(&format!("{RD_HEADER}0,0,0,0,0,0,twelve\n"));
+    assert_row_error(&rows, 2, "s2c", &["`twelve` is not a number"]);
+}
+
+#[test]
+fn readings_wrong_cell_count_names_the_count() {
+    let (_, rows) = readings_rows(&format!(
+        "{RD_HEADER}0,0,0,0\n0.1,0,0,0,0,0,0,0,0\n0.2,0,0,0,0,0,0\n"
+    ));
+    assert_row_error(&rows, 2, "row", &["4 cells, the header has 7"]);
+    assert_row_error(&rows, 3, "row", &["9 cells, the header has 7"]);
+    assert_good_row(&rows, 4);
+}
+
+/// README: "A missing or empty reading keeps the tendon's last value (on the first
+/// row: an error for that row)".
+#[test]
+fn readings_missing_tendon_keeps_its_last_value_and_first_row_is_an_error() {
+    let (_, rows) = readings_rows(&format!(
+        "{RD_HEADER}0,,0,0,0,0,0\n0.1,0.001,0,0,0,0,0\n0.2,,0.0005,0,0,0,0\n"
+    ));
+    assert_row_error(&rows, 2, "s1a", &["missing", "no earlier row"]);
+    assert_good_row(&rows, 3);
+    let row = rows.iter().find(|r| r["line"] == 4).unwrap();
+    assert_eq!(row["status"], "converged", "{row}");
+    assert_eq!(row["readings_m"][0], 0.001, "kept from line 3: {row}");
+    assert_eq!(row["readings_m"][1], 0.0005, "{row}");
+}
+
+#[test]
+fn readings_pull_beyond_the_tendon_names_tendon_and_value() {
+    let (_, rows) = readings_rows(&format!("{RD_HEADER}0,0,0,0.5,0,0,0\n0.1,0,0,0,0,0,0\n"));
+    assert_row_error(
+        &rows,
+        2,
+        "readings",
+        &[
+            "readings[2] (s1c)",
+            "0.5",
+            "pulls in more than the whole tendon",
+        ],
+    );
+    assert_good_row(&rows, 3);
+}
+
+#[test]
+fn readings_header_without_tendon_column_names_the_expected_columns() {
+    let (_, rows) = readings_rows(&format!("foo,bar\n1,2\n{RD_HEADER}0,0,0,0,0,0,0\n"));
+    assert_row_error(&rows, 1, "header", &["no tendon column", "s1a"]);
+    assert_good_row(&rows, 4);
+}
+
+#[test]
+fn readings_on_a_scene_without_tendons_names_the_scene() {
+    let dir = TempDir::new("rdnt");
+    let rows = dir.file("r.csv", &format!("{RD_HEADER}0,0,0,0,0,0,0\n"));
+    let r = run(&["solve", &repo(DEMO), "--readings", &rows]);
+    assert_error(
+        &r,
+        &["demo_two_section.toml", "actuation = \"displacement\""],
+    );
+}
+
+// ---------------------------------------------------------------------------------
+// Calibration recordings (`calibrate` of the shipped demo on a 19-row recording)
+// ---------------------------------------------------------------------------------
+
+/// The first 20 lines of the demo's training recording with `edit` applied.
+fn recording(edit: impl Fn(usize, &str) -> Option<String>) -> String {
+    shipped("data/calibration/train.csv")
+        .lines()
+        .take(20)
+        .enumerate()
+        .filter_map(|(i, l)| edit(i + 1, l))
+        .map(|l| l + "\n")
+        .collect()
+}
+
+/// Line `n` of a recording with cell `col` replaced by `value`.
+fn set_cell(line: &str, col: usize, value: &str) -> String {
+    let mut cells: Vec<&str> = line.split(',').collect();
+    cells[col] = value;
+    cells.join(",")
+}
+
+fn calibrate(tag: &str, text: &str, extra: &[&str]) -> Run {
+    let dir = TempDir::new(tag);
+    let data = dir.file("rec.csv", text);
+    let out = dir.0.join("out").display().to_string();
+    let mut args = vec!["calibrate", CALIB, "--data", &data, "--out", &out];
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+#[test]
+fn recording_missing_marker_column_names_it_and_the_header() {
+    let text = recording(|i, l| {
+        Some(if i == 1 {
+            l.replace("tip_y", "tip_q")
+        } else {
+            l.into()
+        })
+    });
+    let r = calibrate("nocol", &text, &[]);
+    assert_error(&r, &["rec.csv:1", "no column `tip_y`", "tip_q"]);
+}
+
+#[test]
+fn recording_garbage_cell_names_file_line_and_column() {
+    let text = recording(|i, l| {
+        Some(if i == 5 {
+            set_cell(l, 1, "abc")
+        } else {
+            l.into()
+        })
+    });
+    let r = calibrate("garbage", &text, &[]);
+    assert_error(&r, &["rec.csv:5", "column `tension_a`", "`abc`"]);
+}
+
+#[test]
+fn recording_nan_cell_names_file_line_and_column() {
+    let text = recording(|i, l| {
+        Some(if i == 7 {
+            set_cell(l, 5, "NaN")
+        } else {
+            l.into()
+        })
+    });
+    let r = calibrate("nan", &text, &[]);
+    assert_error(&r, &["rec.csv:7", "column `tip_y`", "NaN"]);
+}
+
+#[test]
+fn recording_short_row_names_file_line_and_column() {
+    let text = recording(|i, l| {
+        Some(if i == 6 {
+            l.rsplit_once(',').unwrap().0.into()
+        } else {
+            l.into()
+        })
+    });
+    let r = calibrate("short", &text, &[]);
+    assert_error(&r, &["rec.csv:6", "column `tip_z`", "missing"]);
+}
+
+/// Found by this catalogue: a recording row with more cells than the header is
+/// accepted and its extra cells dropped (the calibration runs on, exit 0), so a
+/// shifted row is fitted as if it were right. `src/calibrate/recording.rs` is being
+/// changed by another session; see the report of 2026-11-24.
+#[test]
+#[ignore = "bug in src/calibrate/recording.rs: a row with an extra cell is accepted silently"]
+fn recording_row_with_an_extra_cell_names_file_and_line() {
+    let text = recording(|i, l| Some(if i == 6 { format!("{l},9") } else { l.into() }));
+    let r = calibrate("extra", &text, &[]);
+    assert_error(&r, &["rec.csv:6", "8 cells"]);
+}
+
+#[test]
+fn recording_without_data_rows_is_an_error() {
+    let text = recording(|i, l| (i == 1).then(|| l.to_string()));
+    let r = calibrate("empty", &text, &[]);
+    assert_error(&r, &["rec.csv:1", "no data rows"]);
+}
+
+#[test]
+fn recording_negative_tension_names_line_field_and_value() {
+    let text = recording(|i, l| {
+        Some(if i == 4 {
+            set_cell(l, 1, "-5")
+        } else {
+            l.into()
+        })
+    });
+    let r = calibrate("negT", &text, &[]);
+    assert_error(&r, &["line 4", "loads.tensions_n[0]", "-5"]);
+}
+
+#[test]
+fn recording_missing_file_names_the_path() {
+    let r = run(&["calibrate", CALIB, "--data", "no/such/rec.csv"]);
+    assert_error(&r, &["no/such/rec.csv"]);
+}
+
+// ---------------------------------------------------------------------------------
+// Command-line arguments
+// ---------------------------------------------------------------------------------
+
+#[test]
+fn cli_unknown_flag_names_the_flag() {
+    let r = run(&["solve", "--frobnicate"]);
+    assert_error(&r, &["'--frobnicate'"]);
+}
+
+#[test]
+fn cli_unknown_subcommand_names_it() {
+    let r = run(&["solvee"]);
+    assert_error(&r, &["'solvee'", "solve"]);
+}
+
+#[test]
+fn cli_bad_length_unit_names_the_value() {
+    let r = run(&["solve", "--model", "auto", "--tol", "3parsecs"]);
+    assert_error(
+        &r,
+        &["'3parsecs'", "--tol", "unknown length unit `parsecs`"],
+    );
+}
+
+#[test]
+fn cli_unknown_model_label_names_it() {
+    let r = run(&["solve", "--model", "cosserat/heavy/rk4-8"]);
+    assert_error(&r, &["`cosserat/heavy/rk4-8`", "kirchhoff/"]);
+}
+
+#[test]
+fn cli_track_unknown_model_label_names_it() {
+    let r = run(&["track", "--model", "pcc/point/zero"]);
+    assert_error(&r, &["`pcc/point/zero`"]);
+}
+
+#[test]
+fn cli_missing_input_names_the_path() {
+    let r = run(&["track", &repo(TRACK), "--input", "no/such/rows.csv"]);
+    assert_error(&r, &["no/such/rows.csv"]);
+}
+
+#[test]
+fn cli_track_without_estimate_table_names_the_scene() {
+    let r = run(&["track", &repo(DEMO)]);
+    assert_error(&r, &["demo_two_section.toml", "no [estimate] table"]);
+}
+
+#[test]
+fn cli_unwritable_output_names_the_path() {
+    let r = run(&["solve", "--samples", "/nonexistent-dir/x/samples.csv"]);
+    assert_error(&r, &["/nonexistent-dir/x/samples.csv"]);
+}
+
+#[test]
+fn cli_empty_row_range_names_it() {
+    let text = recording(|_, l| Some(l.into()));
+    let r = calibrate("rows", &text, &["--train-rows", "10..5"]);
+    assert_error(&r, &["`10..5`", "empty"]);
+}
+
+#[test]
+fn cli_param_path_naming_nothing_names_path_and_index() {
+    let text = recording(|_, l| Some(l.into()));
+    let r = calibrate(
+        "param",
+        &text,
+        &["--param", "robot/sections/7/youngs_modulus_pa"],
+    );
+    assert_error(&r, &["robot/sections/7/youngs_modulus_pa", "no index 7"]);
+}
+
+#[test]
+fn cli_param_bound_not_a_number_names_the_value() {
+    let text = recording(|_, l| Some(l.into()));
+    let r = calibrate(
+        "bound",
+        &text,
+        &["--param", "robot/sections/0/youngs_modulus_pa:abc:1"],
+    );
+    assert_error(&r, &["`abc` is not a number"]);
+}
