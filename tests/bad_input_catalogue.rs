@@ -671,12 +671,10 @@ fn recording_short_row_names_file_line_and_column() {
     assert_error(&r, &["rec.csv:6", "column `tip_z`", "missing"]);
 }
 
-/// Found by this catalogue: a recording row with more cells than the header is
-/// accepted and its extra cells dropped (the calibration runs on, exit 0), so a
-/// shifted row is fitted as if it were right. `src/calibrate/recording.rs` is being
-/// changed by another session; see the report of 2026-11-24.
+/// Found by this catalogue: a recording row with more cells than the header was
+/// accepted and its extra cells dropped (the calibration ran on, exit 0), so a
+/// shifted row was fitted as if it were right; now an error naming file and line.
 #[test]
-#[ignore = "bug in src/calibrate/recording.rs: a row with an extra cell is accepted silently"]
 fn recording_row_with_an_extra_cell_names_file_and_line() {
     let text = recording(|i, l| Some(if i == 6 { format!("{l},9") } else { l.into() }));
     let r = calibrate("extra", &text, &[]);

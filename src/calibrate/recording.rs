@@ -269,6 +269,20 @@ impl Recording {
                     layout = Some(Layout::new(file, line, &header, map)?);
                     continue;
                 };
+                if cells.len() > header.len() {
+                    // a shifted row would be fitted as if it were right: refuse it (a
+                    // short row names the first missing column below)
+                    return Err(cell_err(
+                        file,
+                        line,
+                        "-".into(),
+                        format!(
+                            "{} cells where the header has {}",
+                            cells.len(),
+                            header.len()
+                        ),
+                    ));
+                }
                 let get = |c: &str| -> Option<String> {
                     header
                         .iter()
