@@ -20,6 +20,7 @@ mod fit;
 mod fitted;
 mod hardware;
 mod inverse;
+mod inverse_loo;
 mod param;
 mod tables;
 
@@ -34,6 +35,7 @@ pub use hardware::{
     TRAIN_CSV, VAL_CSV,
 };
 pub use inverse::{table_4_5_inverse, table_4_5_inverse_from, InverseRow, READING_SIGMA_M};
+pub use inverse_loo::{table_4_5_loo, LooRow, TableRowModel, LOO_PARAMS, TIP_SIGMA_M, Z95};
 pub use param::{set_params, set_values, ParamPath};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
 
