@@ -22,6 +22,8 @@
 
 mod fit;
 mod frame;
+mod identify;
+mod identify_assign;
 mod lm;
 mod model;
 mod readings_model;
@@ -35,6 +37,14 @@ pub use fit::{
     FitParam, FittedParam, FrameSetup, Progress, RowResult, Split, Stage,
 };
 pub use frame::{kabsch, rotation_vector, umeyama, RigidTransform};
+pub use identify::{
+    linear_response, scene_segments, servo_rows, IdentifyError, IdentifySettings, LinearResponse,
+    Pattern, PullRecording, PullRow, SceneSegment, ServoRows,
+};
+pub use identify_assign::{
+    identify, identify_file, identify_recording, IdentifyResult, SegmentProposal, ServoEvidence,
+    SwapMargin,
+};
 pub use lm::{
     central_differences, levenberg_marquardt, Bounds, Huber, LeastSquares, LmIteration, LmResult,
     LmSettings, LmStatus,

@@ -58,38 +58,7 @@ pub fn table_4_5_inverse_from(src: &DataSource) -> Result<Vec<InverseRow>, Valid
     for p in &mut scene.loads.point {
         p.mass_kg = 0.0;
     }
-    let model = |context: &str, e: crate::ModelError| ValidationError::Model {
-        context: context.into(),
-        cause: e,
-    };
-    let robot = scene
-        .build_robot()
-        .map_err(|e| model("table 4.5 robot", e))?;
-    let mut spec = EstimateSpec::new(vec![UnknownSpec {
-        kind: UnknownKind::Mass,
-        section: Some(0),
-        axis: None,
-        cable: None,
-        name: Some("tip_mass".into()),
-        min: Some(0.0),
-        max: None,
-        prior_mean: None,
-        prior_sigma: None,
-        reference: 0.0,
-        initial: 0.0,
-    }]);
-    spec.noise_m = READING_SIGMA_M;
-    spec.max_iterations = 50;
-    let mut est = Estimator::new(robot, scene.loads.clone(), scene.numerics.clone(), spec)
-        .map_err(|e| match e {
-            crate::estimate::EstimateError::Model(m) => model("table 4.5 estimator", m),
-            crate::estimate::EstimateError::Reference(st) => ValidationError::NotConverged {
-                table: "4.5".into(),
-                row: 0,
-                status: st,
-                residual: f64::NAN,
-            },
-        })?;
+    let mut est = mass_estimator(&scene)?;
     let mut rows = Vec::new();
     for (m, d) in masses.iter().zip(&deltas) {
         if *m <= 0.0 {
@@ -122,4 +91,41 @@ pub fn table_4_5_inverse_from(src: &DataSource) -> Result<Vec<InverseRow>, Valid
         });
     }
     Ok(rows)
+}
+
+/// The estimator of the tip mass (`loads.point[0]`, >= 0) from the one cable's
+/// reading, reading noise [`READING_SIGMA_M`]; the reference is `scene`'s loads
+/// (set the mass to 0 first: the thesis zeroed the notch at 0 g).
+pub(super) fn mass_estimator(scene: &crate::files::Scene) -> Result<Estimator, ValidationError> {
+    let model = |context: &str, e: crate::ModelError| ValidationError::Model {
+        context: context.into(),
+        cause: e,
+    };
+    let robot = scene
+        .build_robot()
+        .map_err(|e| model("table 4.5 robot", e))?;
+    let mut spec = EstimateSpec::new(vec![UnknownSpec {
+        kind: UnknownKind::Mass,
+        section: Some(0),
+        axis: None,
+        cable: None,
+        name: Some("tip_mass".into()),
+        min: Some(0.0),
+        max: None,
+        prior_mean: None,
+        prior_sigma: None,
+        reference: 0.0,
+        initial: 0.0,
+    }]);
+    spec.noise_m = READING_SIGMA_M;
+    spec.max_iterations = 50;
+    Estimator::new(robot, scene.loads.clone(), scene.numerics.clone(), spec).map_err(|e| match e {
+        crate::estimate::EstimateError::Model(m) => model("table 4.5 estimator", m),
+        crate::estimate::EstimateError::Reference(st) => ValidationError::NotConverged {
+            table: "4.5".into(),
+            row: 0,
+            status: st,
+            residual: f64::NAN,
+        },
+    })
 }

@@ -18,7 +18,9 @@
 mod compare;
 mod fit;
 mod fitted;
+mod hardware;
 mod inverse;
+mod inverse_loo;
 mod param;
 mod tables;
 
@@ -27,7 +29,13 @@ pub use compare::{
 };
 pub use fit::{fit, FitMethod, FitProblem, FitReport, FitSettings, FitStatus, Target};
 pub use fitted::{FitRecord, FitRun, FittedFile, ParamValue, SceneFits, FITTED_FILE};
+pub use hardware::{
+    column_map, hardware_benchmark, parse_summary, shipped_hardware_benchmark, HardwareBenchmark,
+    HardwareSettings, PublishedFigures, StoredSummary, CALIBRATED_SCENE, PUBLISHED, SUMMARY_JSON,
+    TRAIN_CSV, VAL_CSV,
+};
 pub use inverse::{table_4_5_inverse, table_4_5_inverse_from, InverseRow, READING_SIGMA_M};
+pub use inverse_loo::{table_4_5_loo, LooRow, TableRowModel, LOO_PARAMS, TIP_SIGMA_M, Z95};
 pub use param::{set_params, set_values, ParamPath};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
 

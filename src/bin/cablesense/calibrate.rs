@@ -8,6 +8,9 @@
 //!   thesis-predicted columns of the thesis tables (`cablesense::validation::fit`, whose
 //!   Levenberg-Marquardt is `cablesense::calibrate::levenberg_marquardt`).
 
+#[path = "calibrate_identify.rs"]
+mod identify;
+
 use crate::progress;
 use crate::validate::{data_dir, fitted_file, parse_tables};
 use anyhow::Context;
@@ -29,7 +32,13 @@ use std::process::ExitCode;
 #[derive(clap::Args)]
 pub struct Args {
     /// Scene file (recording mode); its `[calibration]` table maps the columns.
+    /// With --identify: the scene whose tendons are matched (default the embedded
+    /// FTDCR v4, `demo:scenes/ftdcr_v4.toml`).
     scene: Option<PathBuf>,
+    /// Propose the servo-to-tendon mapping and per-segment angle offsets from a
+    /// single-tendon pull recording (e.g. data/hardware/ftdcr_v4/tendon_pull.csv).
+    #[arg(long)]
+    identify: Option<PathBuf>,
     /// Recording mode: the training recording (CSV or JSON lines). Thesis mode: the
     /// directory with the thesis tables, scenes and fitted.toml (default as `validate`).
     #[arg(long)]
@@ -117,6 +126,9 @@ pub struct Args {
 
 /// Run `calibrate`. Exit code 0 when the fit converged, 1 otherwise.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    if let Some(f) = &a.identify {
+        return identify::run(f, a.scene.as_deref());
+    }
     if a.tables.is_empty() {
         return run_recording(a);
     }

@@ -36,6 +36,9 @@ pub struct Args {
     /// Do not write figures.
     #[arg(long)]
     no_plots: bool,
+    /// Skip the FTDCR v4 hardware benchmark (run by default when no --table is given).
+    #[arg(long)]
+    no_hardware: bool,
 }
 
 /// `--data` (which must be a directory) or the embedded thesis tables.
@@ -68,7 +71,8 @@ pub fn parse_tables(names: &[String]) -> anyhow::Result<Vec<ThesisTable>> {
         .collect()
 }
 
-/// Run `validate`. Exit code 0 when every row converged, 1 otherwise.
+/// Run `validate`. Exit code 0 when every row converged and the hardware benchmark
+/// passed its checks, 1 otherwise.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let dir = data_dir(a.data)?;
     let (fitted, fitted_path) = if a.no_fitted {
@@ -115,6 +119,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
     if a.tables.is_empty() || a.tables.iter().any(|t| t == "4.5") {
         print_inverse(&dir)?;
+    }
+    if a.tables.is_empty() && !a.no_hardware {
+        let svg = (!a.no_plots).then(|| a.out.join("hardware_ftdcr_v4.svg"));
+        all_ok &= print_hardware(svg.as_deref())?;
     }
     Ok(if all_ok {
         ExitCode::SUCCESS
@@ -329,5 +337,165 @@ fn print_inverse(dir: &DataSource) -> anyhow::Result<()> {
             sum / rows.len() as f64
         );
     }
+    print_loo(dir)
+}
+
+/// Table 4.5 redone: leave one row out, calibrate on the others' observed data.
+fn print_loo(dir: &DataSource) -> anyhow::Result<()> {
+    let rows = cablesense::validation::table_4_5_loo(dir)?;
+    println!();
+    println!("Table 4.5 redone (leave one row out): calibrate E and the hole radius on the OTHER rows' observed tips (table 4.3)");
+    println!("  and cable readings (table 4.5), then estimate the held-out row's mass from its cable reading; 95 % interval from the");
+    println!("  reading noise plus the calibration's covariance. The old experiment above is kept for comparison.");
+    println!(
+        "  {:>9} {:>12} {:>11} {:>19} {:>8} {:>9}  status (fold: E GPa, hole radius mm, train rms sigma)",
+        "truth g", "observed cm", "estimate g", "95 % interval g", "covered", "error %"
+    );
+    let mut sum = 0.0;
+    let (mut covered, mut judged) = (0, 0);
+    for r in &rows {
+        sum += r.error_pct.abs();
+        if let Some(c) = r.covered {
+            judged += 1;
+            covered += usize::from(c);
+        }
+        let interval = if r.covered.is_some() {
+            format!(
+                "{:.1} .. {:.1}",
+                r.interval_kg.0 * 1e3,
+                r.interval_kg.1 * 1e3
+            )
+        } else {
+            "none".into()
+        };
+        println!(
+            "  {:>9.1} {:>12.2} {:>11.1} {:>19} {:>8} {:>9.1}  {:?} ({:.1}, {:.2}, {:.2})",
+            r.truth_kg * 1e3,
+            r.observed_change_m * 1e2,
+            r.estimate_kg * 1e3,
+            interval,
+            match r.covered {
+                Some(true) => "yes",
+                Some(false) => "NO",
+                None => "-",
+            },
+            r.error_pct,
+            r.status,
+            r.params[0] * 1e-9,
+            r.params[1] * 1e3,
+            r.train_rms_sigma
+        );
+    }
+    if !rows.is_empty() {
+        println!(
+            "  mean |error|: {:.1} %; intervals covering the truth: {covered} of {judged} judged (a stalled estimate has no interval)",
+            sum / rows.len() as f64
+        );
+    }
     Ok(())
+}
+
+/// The hardware benchmark: the stored FTDCR v4 calibration on val.csv (and its train
+/// rows) beside the published model. Returns whether every check passed.
+fn print_hardware(svg: Option<&Path>) -> anyhow::Result<bool> {
+    use cablesense::calibrate::{ErrorStats, TipErrors};
+    use cablesense::validation::{shipped_hardware_benchmark, HardwareSettings};
+    let settings = HardwareSettings::default();
+    let b = shipped_hardware_benchmark(&settings)?;
+    let len = b.robot_length_m;
+    println!();
+    println!("Hardware benchmark: FTDCR v4 (data/hardware/ftdcr_v4), stored calibration data/calibration/ftdcr_v4_calibrated.toml");
+    println!(
+        "  tip from the servo readings alone, base frame; robot length {:.1} mm; stored fit: {:?} after {} LM iterations",
+        len * 1e3,
+        b.stored.status,
+        b.stored.iterations
+    );
+    println!(
+        "  {:<46} {:>6} {:>9} {:>9} {:>9} {:>9} {:>8}",
+        "split, metric", "rows", "RMSE mm", "median", "p95", "max", "RMSE %L"
+    );
+    let line = |name: &str, e: &ErrorStats| {
+        println!(
+            "  {:<46} {:>6} {:>9.2} {:>9.2} {:>9.2} {:>9.2} {:>8.2}",
+            name,
+            e.count,
+            e.rmse_m * 1e3,
+            e.median_m * 1e3,
+            e.p95_m * 1e3,
+            e.max_m * 1e3,
+            e.rmse_m / len * 100.0
+        )
+    };
+    let split = |name: &str, e: &TipErrors| {
+        line(&format!("{name}, raw"), &e.raw);
+        line(&format!("{name}, mean offset removed"), &e.mean_removed);
+    };
+    split("val (held out)", &b.val);
+    if let Some(t) = &b.train {
+        split(
+            &format!("train (fit rows, 1 in {})", settings.train_stride),
+            t,
+        );
+    }
+    let p = b.published;
+    println!(
+        "  {:<46} {:>6} {:>9.2} {:>9} {:>9} {:>9} {:>8.2}",
+        "published model, val, offset rm.",
+        443,
+        p.val_rmse_m * 1e3,
+        "-",
+        "-",
+        "-",
+        p.val_rmse_m / p.robot_length_m * 100.0
+    );
+    println!(
+        "  {:<46} {:>6} {:>9.2} {:>9} {:>9} {:>9} {:>8.2}",
+        "published model, train, offset rm.",
+        1620,
+        p.train_rmse_m * 1e3,
+        "-",
+        "-",
+        "-",
+        p.train_rmse_m / p.robot_length_m * 100.0
+    );
+    println!(
+        "  (train rows here are the 324 rows the calibration fitted, so in-sample; the published train figure is over all 1620)"
+    );
+    let stored = b.stored.val.mean_removed.rmse_m;
+    println!(
+        "  checks: every row solved: {} ({} failed); val RMSE {:.3} mm reproduces the stored {:.3} mm within {:.0} %: {}; below the published {:.1} mm: {}",
+        yes(b.failed_rows.is_empty()),
+        b.failed_rows.len(),
+        b.val.mean_removed.rmse_m * 1e3,
+        stored * 1e3,
+        settings.stored_tolerance * 100.0,
+        yes(b.reproduces_stored()),
+        p.val_rmse_m * 1e3,
+        yes(b.beats_published())
+    );
+    for f in b.failed_rows.iter().take(5) {
+        println!("  failed: {f}");
+    }
+    println!("  stored report: data/calibration/ftdcr_v4_report.svg");
+    if let Some(path) = svg {
+        cablesense::calibrate::write_report_svg(
+            path,
+            &b.as_report(),
+            &cablesense::calibrate::SvgOptions {
+                title: "FTDCR v4: stored calibration, recomputed (validate)".into(),
+                input: None,
+            },
+        )?;
+        println!("  figure: {}", path.display());
+    }
+    Ok(b.passed())
+}
+
+fn yes(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "NO"
+    }
 }
