@@ -124,28 +124,9 @@ pub fn calibrate<'py>(
         let train = Recording::load(&train, &map)?;
         let val = val.map(|v| Recording::load(v, &map)).transpose()?;
         let model = SceneModel::new(scene, &paths, &train.input_names, spec.marker_s_m)?;
-        let fit_params: Vec<FitParam> = spec
-            .params
-            .iter()
-            .zip(model.values())
-            .map(|(p, v)| FitParam::from_spec(p, *v))
-            .collect();
-        let frame = FrameSetup {
-            capture_to_base: RigidTransform::from_vector(
-                &Vector3::from(spec.capture_to_base.rotation_vector),
-                &Vector3::from(spec.capture_to_base.translation_m),
-            ),
-            marker_offset_m: Vector3::from(spec.marker_offset_m),
-            fit_capture_frame: spec.fit_capture_frame,
-            fit_marker_offset: spec.fit_marker_offset,
-        };
-        let settings = CalibrationSettings {
-            capture_noise_m: spec.capture_noise_m,
-            huber_sigma: spec.huber_sigma,
-            max_iterations: spec.max_iterations,
-            threads: threads.max(1),
-            ..CalibrationSettings::default()
-        };
+        let fit_params = FitParam::all_from_spec(&spec, model.values());
+        let frame = FrameSetup::from_spec(&spec);
+        let settings = CalibrationSettings::from_spec(&spec, threads);
         let setup = CalibrationSetup {
             model: &model,
             params: fit_params,

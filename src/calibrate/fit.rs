@@ -21,7 +21,7 @@ use super::lm::{
 };
 use super::model::{CalibrationModel, Sensitivities};
 use super::recording::{Recording, RecordingRow};
-use super::spec::ParamSpec;
+use super::spec::{CalibrationSpec, ParamSpec};
 use super::stats::{parameter_statistics, ParamStatistics, TipErrors};
 use super::CalibrationError;
 use crate::math::exp_so3;
@@ -59,6 +59,45 @@ impl FitParam {
             scale: spec
                 .scale
                 .unwrap_or(if initial != 0.0 { initial.abs() } else { 1.0 }),
+        }
+    }
+
+    /// Every `[[calibration.params]]` entry of `spec` with its current value
+    /// (`values`, in the same order: e.g. `SceneModel::values`).
+    pub fn all_from_spec(spec: &CalibrationSpec, values: &[f64]) -> Vec<Self> {
+        spec.params
+            .iter()
+            .zip(values)
+            .map(|(p, v)| Self::from_spec(p, *v))
+            .collect()
+    }
+}
+
+impl FrameSetup {
+    /// The capture frame and marker offset of a scene's `[calibration]` table.
+    pub fn from_spec(spec: &CalibrationSpec) -> Self {
+        Self {
+            capture_to_base: RigidTransform::from_vector(
+                &Vector3::from(spec.capture_to_base.rotation_vector),
+                &Vector3::from(spec.capture_to_base.translation_m),
+            ),
+            marker_offset_m: Vector3::from(spec.marker_offset_m),
+            fit_capture_frame: spec.fit_capture_frame,
+            fit_marker_offset: spec.fit_marker_offset,
+        }
+    }
+}
+
+impl CalibrationSettings {
+    /// The settings a scene's `[calibration]` table gives, on `threads` workers
+    /// (at least 1); the rest at their defaults.
+    pub fn from_spec(spec: &CalibrationSpec, threads: usize) -> Self {
+        Self {
+            capture_noise_m: spec.capture_noise_m,
+            huber_sigma: spec.huber_sigma,
+            max_iterations: spec.max_iterations,
+            threads: threads.max(1),
+            ..Self::default()
         }
     }
 }

@@ -346,12 +346,6 @@ pub fn thesis_table_for(scene_path: &Path) -> Result<Option<TableData>, Experime
     Ok(Some(TableData::load_from(&src, t)?))
 }
 
-/// The reference of the experiments on `robot`: [`Rung::reference`] (a disk of zero
-/// thickness under the accurate guide-mass model is a point mass, its limit).
-pub fn reference_for(_robot: &Robot) -> Rung {
-    Rung::reference()
-}
-
 /// Whether `robot` is driven by readings (any displacement-driven tendon): then
 /// [`run_scene`] sweeps readings ([`super::tdcr::pareto_readings`]).
 pub fn is_tdcr(robot: &Robot) -> bool {
@@ -385,7 +379,7 @@ pub fn run_scene(
         return super::tdcr::pareto_readings(name, scene, &robot, settings, progress);
     }
     let loads = pareto_sweep(&robot, &scene.loads);
-    let mut reference = reference_for(&robot).build(&robot)?;
+    let mut reference = Rung::reference().build(&robot)?;
     let refm = measure(reference.as_mut(), &loads, 1)?;
     let rungs = settings
         .rungs

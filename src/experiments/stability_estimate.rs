@@ -58,7 +58,7 @@ pub(crate) fn estimate_map(
     let nc = robot.cables().len();
     // measurements from the reference model with the scene's guide-mass model, so
     // that the error is the method's, not the mass model's
-    let mut reference_settings = tracking_settings(robot);
+    let mut reference_settings = tracking_settings();
     reference_settings.guide_mass = scene.numerics.guide_mass;
     let mut reference = Rung::Rod(reference_settings).build(robot)?;
     reference.solve(&scene.loads, Start::Cold)?;

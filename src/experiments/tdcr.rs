@@ -89,7 +89,7 @@ fn measure(
 
 /// `pareto` on a robot with displacement-driven tendons: every rung of
 /// [`ladder::readings_ladder`] (or `settings.rungs`) on [`readings_sweep`], errors
-/// against [`super::pareto::reference_for`] driven by the same readings. Estimator ticks and
+/// against [`Rung::reference`] driven by the same readings. Estimator ticks and
 /// observed errors are not measured (NaN): the estimator's unknowns are loads, not
 /// readings.
 pub fn pareto_readings(
@@ -101,7 +101,7 @@ pub fn pareto_readings(
 ) -> Result<ParetoScene, ExperimentError> {
     let readings = readings_sweep(robot)?;
     let nc = robot.cables().len();
-    let mut reference = super::pareto::reference_for(robot).build_readings(robot, &scene.loads)?;
+    let mut reference = Rung::reference().build_readings(robot, &scene.loads)?;
     let refm = measure(reference.as_mut(), &readings, nc, 1)?;
     let rungs = settings
         .rungs
@@ -191,7 +191,7 @@ pub fn readings_map(
     let l = robot.length();
     let nc = robot.cables().len();
     progress(Progress::Step("readings: reference".into()));
-    let reference = RefCell::new(Rung::Rod(tracking_settings(robot)).build_readings(robot, loads)?);
+    let reference = RefCell::new(Rung::Rod(tracking_settings()).build_readings(robot, loads)?);
     let refs: Vec<Option<Vector3<f64>>> = track_with(
         dir.grid(),
         dir.reference_step(),

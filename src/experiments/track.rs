@@ -73,12 +73,12 @@ pub fn track(
     )
 }
 
-/// The reference's settings for tracking: [`super::pareto::reference_for`] without load
+/// The reference's settings for tracking: [`Rung::reference`]'s without load
 /// continuation (a failed warm step along the track then fails fast instead of
 /// restarting from the unloaded rod) and without the branch guard (the reference must
 /// not rely on what the map checks), at a tolerance of at least 1e-10.
-pub fn tracking_settings(robot: &Robot) -> SolverSettings {
-    let mut s = super::pareto::reference_for(robot)
+pub fn tracking_settings() -> SolverSettings {
+    let mut s = Rung::reference()
         .solver_settings()
         .cloned()
         .unwrap_or_default();
@@ -97,7 +97,7 @@ pub fn reference(
     base: &Loads,
     dir: Direction,
 ) -> Result<Vec<Option<Vector3<f64>>>, ExperimentError> {
-    let mut m = Rung::Rod(tracking_settings(robot)).build(robot)?;
+    let mut m = Rung::Rod(tracking_settings()).build(robot)?;
     Ok(track(m.as_mut(), robot, base, dir)?
         .into_iter()
         .map(|p| p.map(|(t, _)| t))

@@ -667,11 +667,14 @@ fn jump_block<T: Real>(
     t: f64,
 ) {
     let len = chord.norm();
-    if len <= 0.0 {
-        return;
-    }
-    let u = chord / len;
-    let d = (Matrix3::identity() - u * u.transpose()) * (t / len);
+    // a zero chord exerts no force along a direction (see `unit`): no dependence on q,
+    // and the block must not keep another disk's values (the buffer is reused)
+    let d = if len > 0.0 {
+        let u = chord / len;
+        (Matrix3::identity() - u * u.transpose()) * (t / len)
+    } else {
+        Matrix3::zeros()
+    };
     let md = arm.cross_matrix() * d;
     for r in 0..3 {
         for c in 0..3 {

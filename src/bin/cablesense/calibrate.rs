@@ -17,10 +17,9 @@ use anyhow::Context;
 use cablesense::calibrate::{
     calibrate, calibrated_scene, parse_row_range, write_report_svg, write_residuals_csv,
     CalibrationReport, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup,
-    ParamSpec, ReadingsModel, Recording, RigidTransform, SceneModel, Stage,
+    ParamSpec, ReadingsModel, Recording, SceneModel, Stage,
 };
 use cablesense::files::demo::DataSource;
-use cablesense::nalgebra::Vector3;
 use cablesense::validation::{
     fit, FitMethod, FitProblem, FitSettings, ParamPath, TableData, Target, FITTED_FILE,
 };
@@ -349,28 +348,9 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
         .map(|p| p.path.parse())
         .collect::<Result<_, _>>()?;
     let model = SceneModel::new(&scene, &paths, &train.input_names, spec.marker_s_m)?;
-    let params: Vec<FitParam> = spec
-        .params
-        .iter()
-        .zip(model.values())
-        .map(|(p, v)| FitParam::from_spec(p, *v))
-        .collect();
-    let frame = FrameSetup {
-        capture_to_base: RigidTransform::from_vector(
-            &Vector3::from(spec.capture_to_base.rotation_vector),
-            &Vector3::from(spec.capture_to_base.translation_m),
-        ),
-        marker_offset_m: Vector3::from(spec.marker_offset_m),
-        fit_capture_frame: spec.fit_capture_frame,
-        fit_marker_offset: spec.fit_marker_offset,
-    };
-    let settings = CalibrationSettings {
-        capture_noise_m: spec.capture_noise_m,
-        huber_sigma: spec.huber_sigma,
-        max_iterations: spec.max_iterations,
-        threads: a.threads.max(1),
-        ..CalibrationSettings::default()
-    };
+    let params = FitParam::all_from_spec(&spec, model.values());
+    let frame = FrameSetup::from_spec(&spec);
+    let settings = CalibrationSettings::from_spec(&spec, a.threads);
     let setup = CalibrationSetup {
         model: &model,
         params,
