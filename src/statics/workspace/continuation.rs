@@ -1,0 +1,313 @@
+//! Cold solves: load continuation (plain and branch-checked), the branch checks of
+//! warm solves and Jacobi's test for conjugate points.
+
+use super::*;
+
+impl Workspace {
+    /// Cold solve: Newton from the straight rod (with Jacobi's test and continuation
+    /// as fallback), or, for loads outside Jacobi's test above [`CERTIFY_INTENSITY`],
+    /// the branch-checked continuation directly.
+    pub(super) fn solve_cold(&mut self) -> (SolveStatus, usize, usize) {
+        self.cold_guess(1.0);
+        self.lu_valid = false;
+        self.b64.local_tol = 1e-9;
+        if self.settings.branch_guard
+            && !self.guarded()
+            && self.load_intensity() > CERTIFY_INTENSITY
+        {
+            return self.checked_continuation();
+        }
+        // A cold Newton from the straight rod is cut short (heavy damping means it is
+        // far from the basin); continuation with a secant predictor is then cheaper.
+        let budget = if self.settings.continuation {
+            COLD_BUDGET.min(self.settings.max_iterations)
+        } else {
+            self.settings.max_iterations
+        };
+        let (mut status, mut iterations) = self.newton(1.0, budget);
+        let mut steps = 0;
+        // branch guard: a cold Newton can land on an unstable equilibrium (looped or
+        // inverted rod, seen from PL^2/EI ~ 5 on); continuation may still reach the
+        // stable one from the unloaded rod
+        if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
+            status = SolveStatus::Unstable;
+            // never hand back the unstable equilibrium as the best full-load iterate
+            self.best_res = f64::INFINITY;
+        }
+        if !status.is_converged() && self.settings.continuation {
+            let (st, it, s) = self.continuation();
+            status = st;
+            iterations += it;
+            steps = s;
+            if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
+                status = SolveStatus::Unstable;
+            }
+        }
+        (status, iterations, steps)
+    }
+
+    /// Warm solve left its branch: after the first accepted step `d1`, Newton moved
+    /// the unknowns by more than `WARM_JUMP_RATIO |d1| + WARM_JUMP_FLOOR` (max norm).
+    pub(super) fn left_branch(&self) -> bool {
+        if !self.first_taken {
+            return false;
+        }
+        let d1 = max_abs_diff(&self.x_first, &self.x_start);
+        let rest = max_abs_diff(&self.x, &self.x_first);
+        let t1 = (self.tip_first - self.tip_start).norm() / self.plan.length;
+        let trest = (self.tip - self.tip_first).norm() / self.plan.length;
+        rest > WARM_JUMP_RATIO * d1 + WARM_JUMP_FLOOR
+            || trest > WARM_JUMP_RATIO * t1 + WARM_JUMP_FLOOR
+    }
+
+    /// [`Workspace::left_branch`], and for a large step under world-fixed loads of
+    /// intensity above [`CERTIFY_INTENSITY`] also Jacobi's test (one `Dual<3>` sweep,
+    /// only then: the control loop's small steps, and mild loads, do not pay for it).
+    pub(super) fn left_branch_checked(&mut self, intensity: f64) -> bool {
+        if self.left_branch() {
+            return true;
+        }
+        let step = max_abs_diff(&self.x, &self.x_start);
+        let moved = (self.tip - self.tip_start).norm() / self.plan.length;
+        self.guarded()
+            && intensity > CERTIFY_INTENSITY
+            && (step > WARM_CHECK_STEP || moved > WARM_CHECK_STEP)
+            && self.conjugate_point().is_some()
+    }
+
+    /// Natural-parameter continuation in the load scale from the unloaded rod, with a
+    /// secant predictor from the last two converged load levels.
+    pub(super) fn continuation(&mut self) -> (SolveStatus, usize, usize) {
+        let mut lam: f64 = 0.0;
+        let mut step: f64 = 0.25;
+        let mut iterations = 0;
+        let mut steps = 0;
+        self.cold_guess(0.0);
+        self.lu_valid = false;
+        self.x_ok.copy_from_slice(&self.x);
+        self.x_prev.copy_from_slice(&self.x);
+        let mut lam_prev: f64 = 0.0;
+        let per_step = self.settings.max_iterations.min(CONTINUATION_BUDGET);
+        while steps < self.settings.max_continuation_steps {
+            let target = (lam + step).min(1.0);
+            if lam > lam_prev {
+                let k = (target - lam) / (lam - lam_prev);
+                for i in 0..self.x.len() {
+                    self.x[i] = self.x_ok[i] + k * (self.x_ok[i] - self.x_prev[i]);
+                }
+            }
+            let (st, it) = self.newton(target, per_step);
+            iterations += it;
+            steps += 1;
+            if st.is_converged() {
+                self.x_prev.copy_from_slice(&self.x_ok);
+                lam_prev = lam;
+                lam = target;
+                self.x_ok.copy_from_slice(&self.x);
+                if lam >= 1.0 {
+                    return (self.status_here(st), iterations, steps);
+                }
+                if it <= 4 {
+                    step *= 2.0;
+                }
+            } else {
+                self.x.copy_from_slice(&self.x_ok);
+                step *= 0.5;
+                if step < 1e-4 {
+                    self.eval_at(false, 1.0);
+                    return (st, iterations, steps);
+                }
+            }
+        }
+        self.x.copy_from_slice(&self.x_ok);
+        let (st, it) = self.newton(1.0, self.settings.max_iterations);
+        (st, iterations + it, steps)
+    }
+
+    /// Branch-checked continuation (the branch guard for loads outside Jacobi's test):
+    /// tangent predictor, steps capped at [`CERTIFY_STEP`] of load intensity, and a
+    /// converged step is accepted only if
+    /// - the corrector moved the unknowns by at most [`CORRECTOR_RATIO`] of the
+    ///   predictor's own move (else it likely converged onto another branch), and
+    /// - the shooting Jacobian's determinant kept the sign it has at the unloaded rod
+    ///   (a sign change means the path passed a fold or bifurcation: past a fold the
+    ///   equilibrium is the unstable sibling of the branch).
+    ///
+    /// A rejected step is halved; below `1e-4` of the load scale (a fold of the
+    /// branch) the status is `stalled`, and running out of steps is `max_iterations`:
+    /// never a full-load Newton from a partial load.
+    pub(super) fn checked_continuation(&mut self) -> (SolveStatus, usize, usize) {
+        let max_step = (CERTIFY_STEP / self.load_intensity()).min(1.0);
+        let mut step = max_step.min(0.25);
+        let (mut lam, mut iterations, mut steps) = (0.0f64, 0, 0);
+        let per_step = self.settings.max_iterations.min(CONTINUATION_BUDGET);
+        self.cold_guess(0.0);
+        let sign0 = match self.tangent(0.0) {
+            Ok(sign) => sign,
+            Err(st) => return (st, 0, 0),
+        };
+        self.x_ok.copy_from_slice(&self.x);
+        self.x_prev.copy_from_slice(&self.x_tan);
+        let mut last = SolveStatus::MaxIterations;
+        while steps < self.settings.max_continuation_steps {
+            let target = (lam + step).min(1.0);
+            let h = target - lam;
+            for i in 0..self.x.len() {
+                self.x[i] = self.x_ok[i] + h * self.x_prev[i];
+            }
+            let (st, it) = self.newton(target, per_step);
+            iterations += it;
+            steps += 1;
+            // corrector move over predictor move: O(h) on a smooth branch, O(1) after a
+            // jump to another one
+            let ratio = if st.is_converged() {
+                self.corrector_ratio(h)
+            } else {
+                f64::INFINITY
+            };
+            let accept = ratio <= CORRECTOR_RATIO && self.tangent(target) == Ok(sign0);
+            // next step from the ratio's linear growth in h, within [h/4, 2h]
+            let grow = (0.8 * CORRECTOR_RATIO / ratio).clamp(0.25, 2.0);
+            if accept {
+                lam = target;
+                self.x_ok.copy_from_slice(&self.x);
+                self.x_prev.copy_from_slice(&self.x_tan);
+                if lam >= 1.0 {
+                    // the tangent's passes re-settled the chords from another start
+                    // (residual 1.3e-12 against 1.0e-12 seen by the fuzzer): confirm
+                    let (st, it) = self.newton(1.0, per_step);
+                    return (st, iterations + it, steps);
+                }
+                step = (h * grow).min(max_step);
+                continue;
+            }
+            last = if st.is_converged() {
+                SolveStatus::Stalled
+            } else {
+                st
+            };
+            self.x.copy_from_slice(&self.x_ok);
+            self.lu_valid = false;
+            step = h * grow.min(0.5);
+            if step < 1e-4 {
+                break;
+            }
+        }
+        self.x.copy_from_slice(&self.x_ok);
+        self.eval_at(false, 1.0);
+        // a branch verdict: the guard could not follow the branch to full load, so no
+        // state of this solve counts as on it, whatever its residual (the partial-load
+        // point evaluated at full load, or the best full-load iterate)
+        self.best_res = f64::INFINITY;
+        self.branch_verdict = true;
+        let st = if step < 1e-4 {
+            last
+        } else {
+            SolveStatus::MaxIterations
+        };
+        (st, iterations, steps)
+    }
+
+    /// How far the corrector of a checked continuation step of size `h` (from `x_ok`
+    /// along the tangent in `x_prev`) moved, relative to the predictor's own move: the
+    /// larger of the ratios for the unknowns and for the tip.
+    pub(super) fn corrector_ratio(&self, h: f64) -> f64 {
+        let (mut dp, mut dc) = (0.0f64, 0.0f64);
+        for i in 0..self.x.len() {
+            let d = h * self.x_prev[i];
+            dp = dp.max(d.abs());
+            dc = dc.max((self.x[i] - self.x_ok[i] - d).abs());
+        }
+        let tip_pred = self.tip_ok + self.tip_tan * h;
+        let (tp, tc) = ((self.tip_tan * h).norm(), (self.tip - tip_pred).norm());
+        (dc / (dp + 1e-9)).max(tc / (tp + 1e-9 * self.plan.length))
+    }
+
+    /// Tangent `dx/dlam = -J^-1 dr/dlam` of the equilibrium path at `x` (converged at
+    /// load scale `lam`) into `x_tan`, and the sign of `det J`: a fresh exact Jacobian
+    /// and a forward difference of the residual in `lam`. Leaves that Jacobian
+    /// factorised for the next corrector.
+    pub(super) fn tangent(&mut self, lam: f64) -> Result<f64, SolveStatus> {
+        let n = self.plan.n_unknowns;
+        self.jac_evals += 1;
+        if !self.eval_at(false, lam) || !self.jacobian(lam) {
+            return Err(SolveStatus::NonFinite);
+        }
+        match self.lu.factor() {
+            Some(rc) if rc > 1e-14 => self.lu_valid = true,
+            _ => return Err(SolveStatus::IllConditioned),
+        }
+        self.dx.copy_from_slice(&self.res);
+        let eps = 1e-6;
+        if !self.eval_at(false, lam + eps) {
+            return Err(SolveStatus::NonFinite);
+        }
+        for i in 0..n {
+            self.x_tan[i] = -(self.res[i] - self.dx[i]) / eps;
+        }
+        self.lu.solve_in_place(&mut self.x_tan);
+        // the tip's tangent, by a pass from this point's settled chords
+        if !self.eval_at(false, lam) {
+            return Err(SolveStatus::NonFinite);
+        }
+        self.tip_ok = self.tip;
+        for i in 0..n {
+            self.x_trial[i] = self.x[i] + eps * self.x_tan[i];
+        }
+        if !self.eval_at(true, lam + eps) {
+            return Err(SolveStatus::NonFinite);
+        }
+        self.tip_tan = (self.tip - self.tip_ok) / eps;
+        // leave the pass state at `lam`
+        self.eval_at(false, lam);
+        Ok(self.lu.det_sign())
+    }
+
+    /// Whether cold solves get the branch guard: world-fixed (dead) loads and no
+    /// tensioned cable, where `n(0)` is in closed form and Jacobi's condition on
+    /// `dm(s)/dm0` is the stability test of the clamped-free rod.
+    pub(super) fn guarded(&self) -> bool {
+        self.settings.branch_guard && self.plan.closed_form
+    }
+
+    /// Jacobi's condition at the current solution: the first arc length (m) where
+    /// `det d(n, m)(s)/d(n0, m0)` (or `det dm(s)/dm0` with `n(0)` in closed form)
+    /// changes sign, i.e. a conjugate point, or `None` when it keeps its sign on
+    /// `(0, L]`. One dual sweep along the base wrench. With the exact cable coupling the
+    /// hole unknowns are held fixed in that sweep, so the test is not defined there:
+    /// `None`.
+    pub fn conjugate_point(&mut self) -> Option<f64> {
+        let n = self.plan.n_unknowns;
+        let (plan, x) = (&self.plan, &self.x);
+        let mut scratch_s = [0.0; 36];
+        let jac_s = &mut scratch_s[..];
+        if plan.condensed {
+            if self.last_pass != Some(1.0) || self.b64.x != *x {
+                self.eval_at(false, 1.0);
+            }
+            let (plan, x, b64) = (&self.plan, &self.x, &self.b64);
+            let b = &mut self.wide.as_mut()?.narrow;
+            b.next.clone_from(&b64.next);
+            b.watch = true;
+            b.conjugate_at = None;
+            let ok = sweep(plan, x, 0, false, b, jac_s, &mut [], 1.0);
+            b.watch = false;
+            return if ok { b.conjugate_at } else { None };
+        }
+        if n == 3 {
+            self.b3.watch = true;
+            self.b3.conjugate_at = None;
+            let ok = sweep::<3>(plan, x, 0, false, &mut self.b3, jac_s, &mut [], 1.0);
+            self.b3.watch = false;
+            ok.then_some(self.b3.conjugate_at).flatten()
+        } else if n == 6 {
+            self.b6.watch = true;
+            self.b6.conjugate_at = None;
+            let ok = sweep::<6>(plan, x, 0, false, &mut self.b6, jac_s, &mut [], 1.0);
+            self.b6.watch = false;
+            ok.then_some(self.b6.conjugate_at).flatten()
+        } else {
+            None
+        }
+    }
+}
