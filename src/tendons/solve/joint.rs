@@ -16,7 +16,8 @@
 //!
 //! The nested method (a converged shooting solve per tension iterate, then a sweep
 //! for `dl/dT`) pays a full warm shooting solve for every tension trial; this one
-//! pays one `f64` pass and one sweep per iteration. Why it is only the warm path:
+//! pays one `f64` pass per iteration and a sweep only when the Broyden-updated
+//! inverse of the last one stops contracting. Why it is only the warm path:
 //! from the previous row it starts within Newton's reach; a cold start needs the
 //! shooting solve's continuation and branch checks, which the nested method keeps.
 //! It hands back to the nested method (from the row's starting point) whenever it
@@ -37,6 +38,8 @@ pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
 /// start vouches for. On the FTDCR v4 recording consecutive rows step up to ~10
 /// (base force ~0.8 N against `EI/L^2` ~0.085 N).
 const MAX_STEP: f64 = 100.0;
+/// While rows' first chord steps fail, every this many rows one tries it again.
+const CHORD_PROBE: usize = 16;
 /// A reused (chord) Jacobian's step must shrink the merit by this factor.
 const CHORD_CONTRACTION: f64 = 0.1;
 
@@ -58,6 +61,23 @@ pub(super) struct JointBufs {
     /// `lu` holds a factorisation with this active set (chord steps).
     lu_taut: Vec<bool>,
     lu_valid: bool,
+    /// The last row's first iteration accepted a chord step. When it did not (rows
+    /// far apart, as in a recording sampled once a second), the next row's first
+    /// iteration goes straight to a fresh Jacobian: a chord trial that fails costs
+    /// two `f64` passes (the trial and the return to the iterate) for nothing.
+    first_chord_ok: bool,
+    /// Rows started with a fresh Jacobian since the last chord trial at a row's start
+    /// (every [`CHORD_PROBE`]th row tries the chord again).
+    rows_fresh: usize,
+    /// Inverse of the Jacobian in `lu` (`m x m` row-major, `m = n + p`), improved after
+    /// every accepted step by Broyden's update, so that the steps that reuse it
+    /// converge superlinearly rather than linearly; and the residual `[r; G]` and the
+    /// step actually taken at the last iterate (its secant pair).
+    h: Vec<f64>,
+    f_now: Vec<f64>,
+    f_prev: Vec<f64>,
+    step: Vec<f64>,
+    hy: Vec<f64>,
     /// `|| [r / tol; G / tol_G] ||_2` at the last evaluation (line-search merit).
     l2: f64,
 }
@@ -74,8 +94,15 @@ impl JointBufs {
             jac_m: vec![0.0; cables * (n + np)],
             dz: vec![0.0; n + p],
             lu: DenseLu::new(n + p),
+            h: vec![0.0; (n + p) * (n + p)],
+            f_now: vec![0.0; n + p],
+            f_prev: vec![0.0; n + p],
+            step: vec![0.0; n + p],
+            hy: vec![0.0; n + p],
             lu_taut: vec![true; p],
             lu_valid: false,
+            first_chord_ok: true,
+            rows_fresh: 0,
             l2: f64::INFINITY,
         }
     }
@@ -107,10 +134,15 @@ impl TendonWorkspace {
                 self.report.status = SolveStatus::Converged;
                 return true;
             }
-            // a chord step with the last factorisation when the active set is the
-            // same; a fresh Jacobian when there is none or the chord step does not
+            // a quasi-Newton step with the last Jacobian's inverse, Broyden-updated
+            // since, when the active set is the same (a "chord" step below); a fresh
+            // Jacobian when there is none or the chord step does not
             // contract the merit by CHORD_CONTRACTION
-            let chord = self.joint.lu_valid && self.joint.lu_taut == self.taut;
+            let mut chord = self.joint.lu_valid && self.joint.lu_taut == self.taut;
+            if it == 0 && chord && !self.joint.first_chord_ok {
+                self.joint.rows_fresh += 1;
+                chord = self.joint.rows_fresh % CHORD_PROBE == 0;
+            }
             let l2_before = self.joint.l2;
             self.joint.xs.copy_from_slice(&self.joint.x);
             self.joint.ts.copy_from_slice(&self.t);
@@ -118,6 +150,9 @@ impl TendonWorkspace {
             for fresh in [false, true] {
                 if !fresh && !chord {
                     continue;
+                }
+                if it == 0 && chord {
+                    self.joint.first_chord_ok = !fresh;
                 }
                 if fresh && chord {
                     // back from the failed chord trial to the iterate
@@ -162,12 +197,18 @@ impl TendonWorkspace {
                     alpha *= 0.5;
                 }
                 if accepted.is_some() {
+                    if it == 0 && chord && !fresh {
+                        self.joint.first_chord_ok = true;
+                    }
                     break;
                 }
                 self.joint.lu_valid = false;
             }
             match accepted {
-                Some(m) => merit = m,
+                Some(m) => {
+                    merit = m;
+                    self.joint_broyden(n, p);
+                }
                 None => return self.joint_hand_back(),
             }
         }
@@ -196,6 +237,9 @@ impl TendonWorkspace {
             .map(|r| (r / tol).powi(2))
             .sum();
         let g2: f64 = self.g.iter().map(|g| (g / tol_g).powi(2)).sum();
+        let n = self.joint.x.len();
+        self.joint.f_now[..n].copy_from_slice(self.ws.residual_vector());
+        self.joint.f_now[n..].copy_from_slice(&self.g);
         self.joint.l2 = (r2 + g2).sqrt();
         Some((res / tol).max(self.merit() / tol_g))
     }
@@ -236,6 +280,18 @@ impl TendonWorkspace {
         }
         jb.lu_valid = matches!(jb.lu.factor(), Some(rc) if rc > 1e-14);
         jb.lu_taut.copy_from_slice(&self.taut);
+        if jb.lu_valid {
+            // explicit inverse (m solves; m = n + p is ~15, far below a pass's cost)
+            jb.h.fill(0.0);
+            for k in 0..m {
+                jb.hy.fill(0.0);
+                jb.hy[k] = 1.0;
+                jb.lu.solve_in_place(&mut jb.hy);
+                for r in 0..m {
+                    jb.h[r * m + k] = jb.hy[r];
+                }
+            }
+        }
         jb.lu_valid
     }
 
@@ -243,16 +299,54 @@ impl TendonWorkspace {
     /// exactly `-T_i` (see the nested method's `exact_slack_steps`).
     fn joint_step(&mut self, n: usize, p: usize) {
         let jb = &mut self.joint;
-        for (d, r) in jb.dz[..n].iter_mut().zip(self.ws.residual_vector()) {
-            *d = -r;
+        let m = n + p;
+        jb.f_prev.copy_from_slice(&jb.f_now);
+        for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
+            *d = -row.iter().zip(&jb.f_now).map(|(a, b)| a * b).sum::<f64>();
         }
-        for i in 0..p {
-            jb.dz[n + i] = -self.g[i];
-        }
-        jb.lu.solve_in_place(&mut jb.dz);
         for i in 0..p {
             if !jb.lu_taut[i] {
                 jb.dz[n + i] = -self.t[i];
+            }
+        }
+    }
+
+    /// Broyden's ("good") update of the inverse Jacobian from the accepted step
+    /// `s = z_new - z_old` and the residual change `y = F_new - F_old`:
+    /// `H <- H + (s - H y) s^T H / (s^T H y)` (Dennis & Schnabel, *Numerical Methods
+    /// for Unconstrained Optimization*, eq. 8.3.1 in inverse form). Skipped when the
+    /// denominator is tiny (the update would be ill-defined).
+    fn joint_broyden(&mut self, n: usize, p: usize) {
+        let jb = &mut self.joint;
+        let m = n + p;
+        for i in 0..n {
+            jb.step[i] = jb.x[i] - jb.xs[i];
+        }
+        for i in 0..p {
+            jb.step[n + i] = self.t[i] - jb.ts[i];
+        }
+        // hy = H y
+        for r in 0..m {
+            let row = &jb.h[r * m..(r + 1) * m];
+            jb.hy[r] = (0..m).map(|c| row[c] * (jb.f_now[c] - jb.f_prev[c])).sum();
+        }
+        let den: f64 = jb.step.iter().zip(&jb.hy).map(|(a, b)| a * b).sum();
+        let ss: f64 = jb.step.iter().map(|a| a * a).sum();
+        if den.abs() <= 1e-12 * ss.max(f64::MIN_POSITIVE) || !den.is_finite() {
+            return;
+        }
+        // w^T = s^T H
+        let mut w = [0.0; 64];
+        if m > w.len() {
+            return;
+        }
+        for (c, wc) in w[..m].iter_mut().enumerate() {
+            *wc = (0..m).map(|r| jb.step[r] * jb.h[r * m + c]).sum();
+        }
+        for (r, row) in jb.h.chunks_exact_mut(m).enumerate() {
+            let u = (jb.step[r] - jb.hy[r]) / den;
+            for (hc, wc) in row.iter_mut().zip(&w[..m]) {
+                *hc += u * wc;
             }
         }
     }
