@@ -181,6 +181,7 @@ pub struct Estimate {
 /// by default ([`Estimator::new`]), or any rung of the model ladder
 /// ([`Estimator::on_rung`], [`Estimator::with_model`]). The methods, bounds, priors,
 /// covariance and statuses are the same on every model.
+#[derive(Clone)]
 pub struct Estimator<M = Workspace> {
     ws: M,
     spec: EstimateSpec,

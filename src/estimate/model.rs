@@ -32,7 +32,7 @@ use nalgebra::Vector3;
 /// by forwarding. Hot methods (`set_theta`, `solve` warm, `cable_lengths_into`,
 /// `length_sensitivities`) must not allocate after warm-up for the estimator tick
 /// to be allocation-free.
-pub trait EstimationModel {
+pub trait EstimationModel: CloneModel {
     /// The robot.
     fn robot(&self) -> &Robot;
     /// The load parameters `theta` are added at (one per unknown).
@@ -89,7 +89,27 @@ impl EstimationModel for Workspace {
 /// A model chosen at run time (`--model` on the command line).
 pub type DynModel = Box<dyn EstimationModel>;
 
-impl<M: EstimationModel + ?Sized> EstimationModel for Box<M> {
+/// Cloning behind a `Box<dyn EstimationModel>`: a stream keeps a copy of its last good
+/// estimator (with the model's whole warm state) to fall back to after a bad row.
+/// Implemented for every `Clone` model.
+pub trait CloneModel {
+    /// A boxed copy of this model.
+    fn clone_model(&self) -> DynModel;
+}
+
+impl<M: EstimationModel + Clone + 'static> CloneModel for M {
+    fn clone_model(&self) -> DynModel {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for DynModel {
+    fn clone(&self) -> Self {
+        (**self).clone_model()
+    }
+}
+
+impl EstimationModel for DynModel {
     fn robot(&self) -> &Robot {
         (**self).robot()
     }
@@ -127,6 +147,7 @@ impl<M: EstimationModel + ?Sized> EstimationModel for Box<M> {
 /// workspace does. Force and torque parameters are world-frame, as for the
 /// workspace: a site on a body-frame point load gets its own world-frame point load
 /// at the same section end.
+#[derive(Clone)]
 pub struct RungModel<F: Differentiable> {
     rung: F,
     base: Loads,
@@ -234,7 +255,7 @@ impl<F: Differentiable> RungModel<F> {
     }
 }
 
-impl<F: Differentiable> EstimationModel for RungModel<F> {
+impl<F: Differentiable + Clone + 'static> EstimationModel for RungModel<F> {
     fn robot(&self) -> &Robot {
         self.rung.robot()
     }

@@ -86,6 +86,7 @@ impl CcSettings {
 }
 
 /// What never changes: the robot and its cable geometry.
+#[derive(Clone)]
 struct Layout {
     robot: Robot,
     /// `e3 x d_jk`: moment arm (local) of cable `j` on section `k`, `[j][k]`.
@@ -208,6 +209,7 @@ impl Layout {
 }
 
 /// Constant curvature per section (module docs).
+#[derive(Clone)]
 pub struct ConstantCurvature {
     layout: Layout,
     settings: CcSettings,

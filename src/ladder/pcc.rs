@@ -136,6 +136,7 @@ struct Piece {
 }
 
 /// What never changes: the robot, its pieces and where loads act.
+#[derive(Clone)]
 struct Layout {
     robot: Robot,
     guide_mass: GuideMass,
@@ -192,6 +193,7 @@ impl<T: Real> Buf<T> {
 }
 
 /// Piecewise constant curvature (module docs).
+#[derive(Clone)]
 pub struct PiecewiseConstantCurvature {
     layout: Layout,
     settings: PccSettings,

@@ -76,6 +76,7 @@ pub enum Start {
 ///
 /// [`Workspace::set_loads`] with the same load structure and [`Workspace::solve`]
 /// with [`Start::Warm`] do not allocate.
+#[derive(Clone)]
 pub struct Workspace {
     robot: Robot,
     loads: Loads,

@@ -80,6 +80,7 @@ pub struct TendonReport {
 }
 
 /// A robot driven by actuator readings: allocate once, solve every row.
+#[derive(Clone)]
 pub struct TendonWorkspace {
     ws: Workspace,
     /// Cable index of each displacement-driven tendon.

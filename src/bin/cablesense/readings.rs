@@ -116,8 +116,10 @@ pub fn stream(
         writeln!(w, "line,s_m,x_m,y_m,z_m")?;
     }
     let (mut solved, mut converged, mut bad) = (0, 0, 0);
-    // readings of the last converged row (`have_good`), the fallback warm start
-    let (mut last_good, mut have_good) = (Vec::new(), false);
+    // the workspace after the last converged row, whole (shooting unknowns, settled
+    // holes, reused Jacobians): a row that does not converge is rolled back to it, so
+    // the rows after it see exactly what they would without it
+    let mut good: Option<TendonWorkspace> = None;
     for (i, line) in reader.lines().enumerate() {
         let line = match line {
             Ok(l) => l,
@@ -150,7 +152,7 @@ pub fn stream(
         converged += usize::from(rep.status.is_converged());
         // a row that did not converge must not become the next row's warm start:
         // after printing it, the last converged row is solved again (warm from here)
-        let fallback = !rep.status.is_converged() && have_good;
+        let fallback = !rep.status.is_converged() && good.is_some();
         match output {
             Output::Json => {
                 let mut record = row_json(&ws, &row, &rep, elapsed);
@@ -166,12 +168,13 @@ pub fn stream(
             }
         }
         if rep.status.is_converged() {
-            last_good.clear();
-            last_good.extend_from_slice(&row.readings_m);
-            have_good = true;
-        } else if have_good {
-            // restore the last good state (its status is not reported: the next row's is)
-            let _ = ws.solve_readings(&last_good);
+            match good.as_mut() {
+                Some(g) => g.clone_from(&ws),
+                None => good = Some(ws.clone()),
+            }
+        } else if let Some(g) = &good {
+            // roll back (the last good row's status is not reported: the next row's is)
+            ws.clone_from(g);
         }
         out.flush()?;
     }

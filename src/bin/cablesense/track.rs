@@ -60,7 +60,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         None => Box::new(std::io::BufReader::new(std::io::stdin())),
     };
     let mut tips = Vec::new();
-    let mut start = est.theta().to_vec();
+    // the estimator after the last good row, its whole warm state (the model's
+    // shooting unknowns and reused Jacobians included): a bad row is rolled back to
+    // it, so the rows after a bad one see exactly what they would without it
+    let mut good = est.clone();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     for (i, line) in reader.lines().enumerate() {
@@ -78,14 +81,15 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         match p.line(i + 1, &line) {
             Ok(None) => {}
             Ok(Some(s)) => {
-                start.copy_from_slice(est.theta());
                 let e = process(&mut est, &s);
                 // a row that stalls, fails or fits poorly must not become the next
-                // row's warm start: fall back to the estimate this row started from
+                // row's warm start: roll back to the state this row started from
                 // (the last good one); `"fallback": true` says so
                 let fallback = poisons_warm_start(&e);
                 if fallback {
-                    est.set_theta(&start);
+                    est.clone_from(&good);
+                } else {
+                    good.clone_from(&est);
                 }
                 let mut record = estimate_json(&s, &e);
                 record["fallback"] = serde_json::json!(fallback);

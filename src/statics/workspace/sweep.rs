@@ -17,6 +17,7 @@ const BROAD: usize = 15;
 /// plus the [`JUMP_DIRS`] local ones. A width of `w` outer directions runs in one
 /// narrow pass when `w <= 6`, else in passes of 15 (fewer, wider passes cost less:
 /// a pass over `Dual<N>` costs about `N + 1` `f64` passes).
+#[derive(Clone)]
 pub(in crate::statics) struct Wide {
     pub narrow: PassBuf<Dual<{ NARROW + JUMP_DIRS }>>,
     pub broad: PassBuf<Dual<{ BROAD + JUMP_DIRS }>>,

@@ -44,6 +44,7 @@ const CHORD_PROBE: usize = 16;
 const CHORD_CONTRACTION: f64 = 0.1;
 
 /// Buffers of the joint path, sized once.
+#[derive(Clone)]
 pub(super) struct JointBufs {
     /// Shooting unknowns and tensions at the row's start, at the current iterate,
     /// and the trial.
