@@ -100,6 +100,21 @@ pub(crate) struct PassBuf<T: Real> {
     /// Condensed coupling: pose of each guide when its `next` holes were last
     /// settled (`f64` passes); a new pass carries `next` along rigidly from it.
     pub anchor: Vec<(Vector3<f64>, Matrix3<f64>)>,
+    /// Condensed coupling: per guide, `D = d q_local / d z` of its pending next holes
+    /// in the guide's frame (`q_local = R_g^T (q - r_g)`) against the outer unknowns
+    /// `z = [x; theta]` (`3 L x W` row-major, `W = n + p`; the theta columns are zero
+    /// after a sweep over `x` only), written by dual passes. `f64` passes use it to
+    /// predict the next holes to first order in the change of `z` since they were
+    /// last settled (see `transport_next`).
+    pub dnext: Vec<Vec<f64>>,
+    /// `dnext` holds matrices from a sweep.
+    pub dnext_valid: bool,
+    /// `f64` passes: per guide, `z` at which its `next` holes were last settled.
+    z_anchor: Vec<Vec<f64>>,
+    /// Dual passes: the first outer direction this pass is seeded along and the
+    /// width `W` of the full sweep (set by `sweep`).
+    pub sweep_c0: usize,
+    pub sweep_w: usize,
     /// Scratch for the per-segment linear solve of a dual pass.
     lin: Vec<f64>,
     /// Dual passes: watch `det d(n, m)(s) / d(n0, m0)` (or `det dm(s)/dm0` when `n(0)`
@@ -132,6 +147,15 @@ impl<T: Real> PassBuf<T> {
                 .collect(),
             mlin_valid: false,
             anchor: vec![(Vector3::zeros(), Matrix3::identity()); plan.pending.len()],
+            dnext: plan
+                .pending
+                .iter()
+                .map(|p| vec![0.0; 3 * p.len() * (plan.n_unknowns + plan.params.len())])
+                .collect(),
+            dnext_valid: false,
+            z_anchor: vec![Vec::new(); plan.pending.len()],
+            sweep_c0: 0,
+            sweep_w: 0,
             lin: vec![0.0; 36 + JUMP_DIRS * (T::DIRS + 2 * plan.max_pending_dirs)],
             jump_b: vec![0.0; JUMP_DIRS * plan.max_pending_dirs],
             settle_h: vec![0.0; plan.max_pending_dirs * plan.max_pending_dirs],
@@ -355,6 +379,7 @@ pub(crate) fn pass<T: Real>(
                 if let Some(ck) = check.as_mut().filter(|ck| ck.g + 1 == g) {
                     if T::DIRS > 0 {
                         fold_segment(plan, buf, &mut y, ck.g);
+                        store_dnext(plan, buf, &y, &ck.y, ck.g);
                     } else if !settle_segment(plan, buf, &y, ck) {
                         if ck.iterations > MAX_LOCAL_ITERATIONS {
                             return Err(PassError::Coupling(iv.s1));
@@ -554,16 +579,69 @@ fn next_hole<T: Real>(plan: &Plan, y: &State<T>, j: usize, k: usize) -> Vector3<
 
 /// `f64` pass reaching guide `g`: move the assumed next holes rigidly with the disk
 /// from where they were last settled (`q <- r + R R_a^T (q - r_a)`), so that only
-/// the segment's change of shape is left for the local iteration.
+/// the segment's change of shape is left for the local iteration; with a sweep's
+/// `D = d q_local/dz` (`dnext`), that change is predicted too, to first order in the
+/// change of the outer unknowns since the last settle:
+/// `q <- r + R (R_a^T (q - r_a) + D (z - z_a))`. The local iteration then starts
+/// from an error second order in that change (plus `D`'s own staleness) instead of
+/// first order, and needs fewer re-integrations of the segment.
 fn transport_next<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &State<T>, g: usize) {
     let (r, rot) = (y.r.map(|x| x.re()), y.rot.map(|x| x.re()));
     let (ra, rota) = buf.anchor[g];
-    let map = rot * rota.transpose();
-    for &(j, k) in &plan.pending[g] {
+    let n = buf.x.len();
+    let w = n + buf.theta.len();
+    let za = &buf.z_anchor[g];
+    let predict = buf.dnext_valid && za.len() == w;
+    for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
         let q = &mut buf.next[j][k];
-        *q = r + map * (*q - ra);
+        let mut local = rota.transpose() * (*q - ra);
+        if predict {
+            let d = &buf.dnext[g];
+            for a in 0..3 {
+                let row = &d[(3 * i + a) * w..(3 * i + a + 1) * w];
+                let mut dq = 0.0;
+                for c in 0..n {
+                    dq += row[c] * (buf.x[c].re() - za[c]);
+                }
+                for c in n..w {
+                    dq += row[c] * (buf.theta[c - n].re() - za[c]);
+                }
+                local[a] += dq;
+            }
+        }
+        *q = r + rot * local;
     }
     buf.anchor[g] = (r, rot);
+    let za = &mut buf.z_anchor[g];
+    za.clear();
+    za.extend(buf.x.iter().chain(&buf.theta).map(|v| v.re()));
+}
+
+/// Dual pass at the disk after `g`, after the fold: `D = d q_local/dz` of the pending
+/// next holes in guide `g`'s frame (`yg`: the state at guide `g`), columns
+/// `sweep_c0..` of this pass's outer directions (see `dnext`).
+fn store_dnext<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &State<T>, yg: &State<T>, g: usize) {
+    let nout = T::DIRS - JUMP_DIRS;
+    let (c0, sw) = (buf.sweep_c0, buf.sweep_w);
+    // rows have the full width `n + p` whatever this sweep covers
+    let w = buf.x.len() + buf.theta.len();
+    if sw == 0 || c0 >= sw || sw > w {
+        return;
+    }
+    let width = nout.min(sw - c0);
+    let rt = yg.rot.transpose();
+    let d = &mut buf.dnext[g];
+    if d.len() < 3 * plan.pending[g].len() * w {
+        return;
+    }
+    for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
+        let local = rt * (next_hole(plan, y, j, k) - yg.r);
+        for a in 0..3 {
+            let e = local[a].eps();
+            let row = &mut d[(3 * i + a) * w..(3 * i + a + 1) * w];
+            row[c0..c0 + width].copy_from_slice(&e[..width]);
+        }
+    }
 }
 
 /// `f64` pass at the disk after `ck.g`: compare the computed holes with the assumed

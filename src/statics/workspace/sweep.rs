@@ -119,6 +119,8 @@ pub(in crate::statics) fn sweep<const N: usize>(
     for k in 0..p {
         buf.theta[k] = seed(n + k, buf.theta[k].v);
     }
+    buf.sweep_c0 = c0;
+    buf.sweep_w = w;
     if pass(plan, buf, lam, None).is_err() {
         return false;
     }
@@ -155,6 +157,8 @@ fn wide_sweeps<const N: usize>(
     lam: f64,
 ) -> bool {
     b.next.clone_from(&b64.next);
+    // columns a sweep over `x` alone does not reach (theta) predict nothing
+    b.dnext.iter_mut().for_each(|d| d.fill(0.0));
     let ok = (0..w)
         .step_by(N - JUMP_DIRS)
         .all(|c0| sweep(plan, x, c0, with_theta, b, jac_s, jac_m, lam));
@@ -164,6 +168,10 @@ fn wide_sweeps<const N: usize>(
     if ok && b.mlin_valid {
         b64.mlin.clone_from(&b.mlin);
         b64.mlin_valid = true;
+    }
+    if ok {
+        b64.dnext.clone_from(&b.dnext);
+        b64.dnext_valid = true;
     }
     ok
 }
