@@ -78,6 +78,8 @@ pub(crate) struct PassBuf<T: Real> {
     pub holes: Vec<Vec<Vector3<T>>>,
     /// Length of each continuously routed cable, integrated along the pass (m).
     pub lengths: Vec<T>,
+    /// `lengths` at the condensed coupling's checkpoint.
+    lengths_ck: Vec<T>,
     pub rhs_evals: u64,
     /// Condensed coupling: segment re-integrations (local iterations) so far.
     pub retries: u64,
@@ -121,6 +123,7 @@ impl<T: Real> PassBuf<T> {
             res: vec![T::zero(); plan.n_unknowns],
             holes: plan.cables.iter().map(|c| vec![z; c.len]).collect(),
             lengths: vec![T::zero(); plan.cables.len()],
+            lengths_ck: vec![T::zero(); plan.cables.len()],
             rhs_evals: 0,
             retries: 0,
             local_tol: LOCAL_TOL,
@@ -389,6 +392,8 @@ pub(crate) fn pass<T: Real>(
                         // re-integrate the segment with the updated next holes
                         buf.retries += 1;
                         y = ck.y;
+                        // continuous tendons' lengths as they were at the checkpoint
+                        buf.lengths.clone_from_slice(&buf.lengths_ck);
                         h_adapt = ck.h_adapt;
                         if let Some(r) = rec.as_deref_mut() {
                             r.samples.truncate(ck.samples);
@@ -403,6 +408,7 @@ pub(crate) fn pass<T: Real>(
                     if T::DIRS == 0 {
                         transport_next(plan, buf, &y, g);
                     }
+                    buf.lengths_ck.clone_from_slice(&buf.lengths);
                     check = Some(Checkpoint {
                         g,
                         iv: i,
