@@ -558,3 +558,52 @@ fn bad_paths_name_the_field() {
         ""
     );
 }
+
+/// The estimator reads continuous tendons' length changes like disk cables': a tip
+/// force (x, y) on Till's robot from the four tendons' changes (one tensioned, three
+/// passive) comes back within `1e-8 + 1e-6 |F|` N (the estimate round-trip tolerance
+/// of `tests/estimate_roundtrip.rs`: forward solves to 1e-10 scaled residual).
+#[test]
+fn estimator_recovers_a_tip_force_from_continuous_tendon_lengths() {
+    use cablesense::estimate::{Axis, EstimateSpec, Estimator, UnknownSpec};
+    use cablesense::PointLoad;
+    let sc = till();
+    let robot = sc.build_robot().unwrap();
+    let lengths_at = |loads: &Loads| {
+        let mut ws = Workspace::new(robot.clone(), loads.clone(), sc.numerics.clone()).unwrap();
+        assert!(ws.solve(Start::Cold).status.is_converged());
+        let mut l = [0.0; 4];
+        ws.cable_lengths_into(&mut l);
+        l
+    };
+    let reference = lengths_at(&sc.loads);
+    let truth = [0.05, -0.03];
+    let mut loaded = sc.loads.clone();
+    loaded.point.push(PointLoad {
+        section: 0,
+        force_n: [truth[0], truth[1], 0.0],
+        ..PointLoad::default()
+    });
+    let measured = lengths_at(&loaded);
+    let changes: Vec<f64> = measured
+        .iter()
+        .zip(&reference)
+        .map(|(a, b)| a - b)
+        .collect();
+    let spec = EstimateSpec::new(vec![
+        UnknownSpec::force(0, Axis::X),
+        UnknownSpec::force(0, Axis::Y),
+    ]);
+    let mut est =
+        Estimator::new(robot.clone(), sc.loads.clone(), sc.numerics.clone(), spec).unwrap();
+    let status = est.tick(&changes, None);
+    let e = est.estimate();
+    eprintln!("{status:?} {:?} changes {changes:?}", e.values);
+    for (v, t) in e.values.iter().zip(truth) {
+        assert!(
+            (v - t).abs() < 1e-8 + 1e-6 * t.abs(),
+            "{:?} vs {truth:?}",
+            e.values
+        );
+    }
+}
