@@ -1,6 +1,6 @@
 //! Continuous tendon routing (Rucker & Webster 2011) on Till's example tendon robot
 //! (`data/scenes/till_tendon_robot.toml`: 0.5 m steel rod, four straight continuous
-//! tendons, 15 N on the first, gravity; 32 RK4 steps).
+//! tendons, 15 N on the first, gravity; 16 RK4 steps).
 //!
 //! * `till_warm_ramp`: a warm solve per step of a tension ramp on the first tendon,
 //!   1 -> 15 -> 1 N in steps of 0.1 N (the control-loop case; `set_loads` keeps the
