@@ -59,6 +59,10 @@ pub const FILES: &[DemoFile] = &[
         "the two-segment robot of the C++ project tdcr-modeling (exact against condensed coupling)"
     ),
     demo!(
+        "scenes/till_tendon_robot.toml",
+        "John Till's example tendon robot: four straight continuous tendons (Rucker & Webster 2011 routing)"
+    ),
+    demo!(
         "scenes/tdcr_two_segment.toml",
         "textbook two-segment tendon-driven robot (displacement-driven tendons)"
     ),

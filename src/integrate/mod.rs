@@ -3,7 +3,10 @@
 
 mod steppers;
 
-pub use steppers::{dp45_step, rk4_step, Dp45Outcome, ErrScale};
+pub use steppers::{
+    dp45_step, dp45_step_with, rk4_step, rk4_step_with, Dp45Outcome, ErrScale, DP45_B, DP45_C,
+    RK4_B, RK4_C,
+};
 
 use crate::math::{cross, mat_skew, mat_t_vec, mat_vec, Real};
 use nalgebra::{Matrix3, Vector3};

@@ -7,10 +7,27 @@ use crate::math::{orthonormalize, Real};
 /// (a Newton-Schulz step, exact for dual numbers). Four RHS evaluations.
 #[inline]
 pub fn rk4_step<T: Real>(y: &State<T>, h: f64, c: &Coeffs) -> State<T> {
-    let k1 = rhs(y, c);
-    let k2 = rhs(&y.add_scaled(&k1, 0.5 * h), c);
-    let k3 = rhs(&y.add_scaled(&k2, 0.5 * h), c);
-    let k4 = rhs(&y.add_scaled(&k3, h), c);
+    rk4_step_with(y, h, |y, _| rhs(y, c))
+}
+
+/// Stage abscissae `c_k` (fractions of the step) of [`rk4_step_with`].
+pub const RK4_C: [f64; 4] = [0.0, 0.5, 0.5, 1.0];
+/// Stage weights `b_k` of [`rk4_step_with`].
+pub const RK4_B: [f64; 4] = [1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0];
+
+/// [`rk4_step`] with any right-hand side `f(y, stage)`, evaluated at stage
+/// `k = 0..4` at `s + RK4_C[k] h` (a non-autonomous field, or one that integrates a
+/// quadrature alongside with the weights [`RK4_B`]).
+#[inline]
+pub fn rk4_step_with<T: Real>(
+    y: &State<T>,
+    h: f64,
+    mut f: impl FnMut(&State<T>, usize) -> State<T>,
+) -> State<T> {
+    let k1 = f(y, 0);
+    let k2 = f(&y.add_scaled(&k1, 0.5 * h), 1);
+    let k3 = f(&y.add_scaled(&k2, 0.5 * h), 2);
+    let k4 = f(&y.add_scaled(&k3, h), 3);
     let mut out = y.add_scaled(&k1, h / 6.0);
     out = out.add_scaled(&k2, h / 3.0);
     out = out.add_scaled(&k3, h / 3.0);
@@ -47,6 +64,31 @@ pub fn dp45_step<T: Real>(
     tol: f64,
     scale: &ErrScale,
 ) -> Dp45Outcome<T> {
+    dp45_step_with(y, h, |y, _| rhs(y, c), tol, scale)
+}
+
+/// Stage abscissae `c_k` of [`dp45_step_with`] (stage 6 is the FSAL point `s + h`).
+pub const DP45_C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
+/// Fifth-order weights `b_k` of [`dp45_step_with`] (the accepted solution).
+pub const DP45_B: [f64; 7] = [
+    35.0 / 384.0,
+    0.0,
+    500.0 / 1113.0,
+    125.0 / 192.0,
+    -2187.0 / 6784.0,
+    11.0 / 84.0,
+    0.0,
+];
+
+/// [`dp45_step`] with any right-hand side `f(y, stage)`, stage `k` at
+/// `s + DP45_C[k] h` (see [`rk4_step_with`]).
+pub fn dp45_step_with<T: Real>(
+    y: &State<T>,
+    h: f64,
+    mut f: impl FnMut(&State<T>, usize) -> State<T>,
+    tol: f64,
+    scale: &ErrScale,
+) -> Dp45Outcome<T> {
     const A21: f64 = 1.0 / 5.0;
     const A31: f64 = 3.0 / 40.0;
     const A32: f64 = 9.0 / 40.0;
@@ -75,29 +117,29 @@ pub fn dp45_step<T: Real>(
     const E6: f64 = 22.0 / 525.0;
     const E7: f64 = -1.0 / 40.0;
 
-    let k1 = rhs(y, c);
-    let k2 = rhs(&y.add_scaled(&k1, h * A21), c);
-    let k3 = rhs(&y.add_scaled(&k1, h * A31).add_scaled(&k2, h * A32), c);
-    let k4 = rhs(
+    let k1 = f(y, 0);
+    let k2 = f(&y.add_scaled(&k1, h * A21), 1);
+    let k3 = f(&y.add_scaled(&k1, h * A31).add_scaled(&k2, h * A32), 2);
+    let k4 = f(
         &y.add_scaled(&k1, h * A41)
             .add_scaled(&k2, h * A42)
             .add_scaled(&k3, h * A43),
-        c,
+        3,
     );
-    let k5 = rhs(
+    let k5 = f(
         &y.add_scaled(&k1, h * A51)
             .add_scaled(&k2, h * A52)
             .add_scaled(&k3, h * A53)
             .add_scaled(&k4, h * A54),
-        c,
+        4,
     );
-    let k6 = rhs(
+    let k6 = f(
         &y.add_scaled(&k1, h * A61)
             .add_scaled(&k2, h * A62)
             .add_scaled(&k3, h * A63)
             .add_scaled(&k4, h * A64)
             .add_scaled(&k5, h * A65),
-        c,
+        5,
     );
     let mut y5 = y
         .add_scaled(&k1, h * B1)
@@ -105,7 +147,7 @@ pub fn dp45_step<T: Real>(
         .add_scaled(&k4, h * B4)
         .add_scaled(&k5, h * B5)
         .add_scaled(&k6, h * B6);
-    let k7 = rhs(&y5, c);
+    let k7 = f(&y5, 6);
     let zero = State {
         r: y.r.map(|_| T::zero()),
         rot: y.rot.map(|_| T::zero()),

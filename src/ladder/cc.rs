@@ -228,6 +228,7 @@ impl ConstantCurvature {
     /// Build for `robot`.
     pub fn new(robot: Robot, settings: CcSettings) -> Result<Self, LadderError> {
         settings.validate()?;
+        super::reject_continuous(&robot)?;
         let ns = robot.sections().len();
         let arms = robot
             .cables()

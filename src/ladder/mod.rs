@@ -395,6 +395,24 @@ pub(crate) fn add_params(
     Ok(())
 }
 
+/// The curvature rungs (CC, PCC) model cables as chords between disk holes; a
+/// continuously routed tendon (`statics::continuous`) is rejected, naming the cable.
+/// Where it would fit: a straight continuous tendon alone keeps its section's
+/// curvature exactly constant without other loads (its tangent stays along the
+/// backbone, so the rod carries the constant moment `tau r x e3`:
+/// `tests/continuous_routing.rs`, `straight_tendon_without_gravity_is_an_exact_arc`);
+/// a helical or tabulated path does not (`r(s)` turns, and the tendon's moment and
+/// distributed force turn with it), so no CC rung can represent it.
+pub(crate) fn reject_continuous(robot: &Robot) -> Result<(), LadderError> {
+    match robot.cables().iter().position(|c| c.path.is_some()) {
+        Some(j) => Err(LadderError::Model(ModelError::Invalid {
+            field: format!("robot.cables[{j}].routing"),
+            why: "continuous routing is solved by the rod rungs only (the curvature rungs model cables as chords between disks)".into(),
+        })),
+        None => Ok(()),
+    }
+}
+
 /// Validate `loads` against `robot` cheaply on the hot path: the allocating
 /// [`Loads::validate`] (with its field paths) runs only when a quick check fails.
 pub(crate) fn check_loads(robot: &Robot, loads: &Loads) -> Result<(), LadderError> {

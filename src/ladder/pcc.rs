@@ -214,6 +214,7 @@ impl PiecewiseConstantCurvature {
     /// Build the pieces for `robot`.
     pub fn new(robot: Robot, settings: PccSettings) -> Result<Self, LadderError> {
         settings.validate()?;
+        super::reject_continuous(&robot)?;
         let layout = Layout::new(robot, &settings);
         let np = layout.pieces.len();
         Ok(Self {

@@ -7,10 +7,12 @@
 //! `+y`; cable `j` runs from the base plate (`s = 0`) through every guide of the
 //! sections it spans to the last guide of its `end_section`.
 
+mod routing;
 mod spec;
 
+pub use routing::{PathPoint, PathSpec, RoutingField, TendonPath};
 pub use spec::{
-    BaseSpec, CableSpec, GuideSpec, HolesSpec, RobotSpec, SectionFile, SectionSpec,
+    BaseSpec, CableFile, CableSpec, GuideSpec, HolesSpec, RobotSpec, SectionFile, SectionSpec,
     MAX_GUIDES_PER_SECTION,
 };
 
@@ -81,6 +83,12 @@ pub struct Cable {
     pub route: Vec<usize>,
     /// Hole position on the base plate, in the base frame (m).
     pub base_hole: Vector3<f64>,
+    /// Continuous routing: the tendon's path `r(s)` along the rod (`route` and
+    /// `hole_local` are then empty). `None` for a disk-routed cable.
+    pub path: Option<TendonPath>,
+    /// Arc length where the cable ends (m): its termination disk, or the end of
+    /// `end_section` for a continuous tendon.
+    pub end_s: f64,
 }
 
 /// A validated robot: an invalid one cannot be constructed.
@@ -135,6 +143,10 @@ impl Robot {
         }
         let mut cables = Vec::with_capacity(spec.cables.len());
         for (j, c) in spec.cables.iter().enumerate() {
+            if c.continuous {
+                cables.push(Self::continuous_cable(&spec, &sections, c, j)?);
+                continue;
+            }
             let route: Vec<usize> = (0..guides.len())
                 .filter(|&g| guides[g].section <= c.end_section)
                 .collect();
@@ -163,8 +175,10 @@ impl Robot {
                 actuation: c.actuation,
                 mechanics: TendonMechanics::resolve(&c.mechanics(spec.tendons.as_ref())),
                 end_section: c.end_section,
+                end_s: guides[last].s,
                 route,
                 base_hole,
+                path: None,
             });
         }
         let axis = Vector3::from(spec.base.axis);
@@ -176,6 +190,51 @@ impl Robot {
             guides,
             cables,
             base_rotation,
+        })
+    }
+
+    /// A continuously routed tendon from the base to the end of its `end_section`;
+    /// its path must stay on the disks of the sections it crosses.
+    fn continuous_cable(
+        spec: &RobotSpec,
+        sections: &[Section],
+        c: &spec::CableSpec,
+        j: usize,
+    ) -> Result<Cable, ModelError> {
+        let field = format!("robot.cables[{j}].path");
+        let end_s = sections[c.end_section].end();
+        let max_radius = spec.sections[..=c.end_section]
+            .iter()
+            .filter_map(|s| s.guides.as_ref().map(|g| g.diameter_m / 2.0))
+            .fold(f64::INFINITY, f64::min);
+        let path = c
+            .path
+            .as_ref()
+            .ok_or_else(|| ModelError::Invalid {
+                field: field.clone(),
+                why: "missing".into(),
+            })?
+            .build(&field, end_s, max_radius)?;
+        if path.max_radius(end_s) > max_radius {
+            return Err(ModelError::OutOfRange {
+                field,
+                value: path.max_radius(end_s),
+                why: format!("the spline leaves the disks it passes (radius {max_radius} m)"),
+            });
+        }
+        let name = c.name.clone().unwrap_or_else(|| format!("cable{j}"));
+        Ok(Cable {
+            reading: c.reading.clone().unwrap_or_else(|| name.clone()),
+            name,
+            hole: None,
+            hole_local: Vec::new(),
+            actuation: c.actuation,
+            mechanics: TendonMechanics::resolve(&c.mechanics(spec.tendons.as_ref())),
+            end_section: c.end_section,
+            route: Vec::new(),
+            base_hole: path.eval(0.0)[0],
+            path: Some(path),
+            end_s,
         })
     }
 

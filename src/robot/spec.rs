@@ -1,5 +1,6 @@
 //! Serializable robot description (the `[robot]` table of a scene file), SI units.
 
+use super::routing::{PathSpec, RoutingField};
 use crate::error::ModelError;
 use crate::rod::{CrossSection, Material};
 use crate::tendons::{Actuation, FrictionSpec, RoutingSpec, TendonSpec};
@@ -173,8 +174,11 @@ fn three_holes() -> Vec<f64> {
 }
 
 /// A cable: which hole it uses, where it ends, and how it is driven.
+///
+/// In files `routing` is either a hole table or the string `"continuous"` (then with
+/// a `path`, see [`super::routing`]); the file form is [`CableFile`].
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "CableFile", into = "CableFile")]
 pub struct CableSpec {
     /// Optional name used in reports (default `cable<j>`).
     #[serde(default)]
@@ -199,6 +203,73 @@ pub struct CableSpec {
     /// (displacement-driven tendons). Default: the cable's name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reading: Option<String>,
+    /// Continuous routing (scene `routing = "continuous"`): the tendon runs along
+    /// `path` from the base to the end of `end_section`, not through disks.
+    pub continuous: bool,
+    /// The continuous tendon's path in the cross-section.
+    pub path: Option<PathSpec>,
+}
+
+/// The file form of [`CableSpec`] (every key at one level, unknown keys rejected).
+#[allow(missing_docs)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CableFile {
+    #[serde(default)]
+    pub name: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hole: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub routing: Option<RoutingField>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathSpec>,
+    pub end_section: usize,
+    #[serde(default)]
+    pub actuation: Actuation,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tendon: Option<TendonSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reading: Option<String>,
+}
+
+impl From<CableFile> for CableSpec {
+    fn from(f: CableFile) -> Self {
+        let (continuous, routing) = match f.routing {
+            Some(RoutingField::Continuous) => (true, None),
+            Some(RoutingField::Holes(h)) => (false, Some(h)),
+            None => (false, None),
+        };
+        Self {
+            name: f.name,
+            hole: f.hole,
+            routing,
+            end_section: f.end_section,
+            actuation: f.actuation,
+            tendon: f.tendon,
+            reading: f.reading,
+            continuous,
+            path: f.path,
+        }
+    }
+}
+
+impl From<CableSpec> for CableFile {
+    fn from(c: CableSpec) -> Self {
+        let routing = match (c.continuous, c.routing) {
+            (true, _) => Some(RoutingField::Continuous),
+            (false, r) => r.map(RoutingField::Holes),
+        };
+        Self {
+            name: c.name,
+            hole: c.hole,
+            routing,
+            path: c.path,
+            end_section: c.end_section,
+            actuation: c.actuation,
+            tendon: c.tendon,
+            reading: c.reading,
+        }
+    }
 }
 
 impl CableSpec {
@@ -267,7 +338,10 @@ impl RobotSpec {
                     count: self.sections.len(),
                 });
             }
-            match (&c.hole, &c.routing) {
+            if c.continuous || c.path.is_some() {
+                super::routing::validate_cable(c, &f)?;
+            } else {
+                match (&c.hole, &c.routing) {
                 (Some(_), Some(_)) => {
                     return Err(ModelError::Invalid {
                         field: f,
@@ -282,6 +356,7 @@ impl RobotSpec {
                 }
                 (None, Some(r)) => r.validate(&format!("{f}.routing"))?,
                 (Some(_), None) => {}
+            }
             }
             if let Some(t) = &c.tendon {
                 t.validate(&format!("{f}.tendon"))?;

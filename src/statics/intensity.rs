@@ -77,11 +77,17 @@ pub(crate) fn load_intensity(
             if c.end_section != k {
                 continue;
             }
-            let (Some(&g), Some(d)) = (c.route.last(), c.hole_local.last()) else {
+            // the last hole, or a continuous tendon's offset where it ends
+            let Some(d) = c
+                .path
+                .as_ref()
+                .map(|p| p.eval(c.end_s)[0])
+                .or(c.hole_local.last().copied())
+            else {
                 continue;
             };
-            s_end = robot.guides()[g].s;
-            moment += Vector3::z().cross(d) * tension(j);
+            s_end = c.end_s;
+            moment += Vector3::z().cross(&d) * tension(j);
         }
         sum += moment.norm() * s_end;
     }

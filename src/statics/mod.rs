@@ -6,6 +6,7 @@
 //! tensioned cables. Newton's method with an exact Jacobian from forward-mode dual
 //! numbers, a backtracking line search, warm starts and load continuation.
 
+mod continuous;
 mod floor;
 mod intensity;
 mod pass;

@@ -24,6 +24,7 @@
 //! derivatives are exact; `M = I + C (I - B C)^-1 B` (Woodbury) is handed to the
 //! `f64` passes.
 
+use super::continuous;
 use super::plan::{Event, ParamSite, Plan, JUMP_DIRS};
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
 use crate::math::Real;
@@ -75,6 +76,10 @@ pub(crate) struct PassBuf<T: Real> {
     pub res: Vec<T>,
     /// Hole positions per cable per route disk (world).
     pub holes: Vec<Vec<Vector3<T>>>,
+    /// Length of each continuously routed cable, integrated along the pass (m).
+    pub lengths: Vec<T>,
+    /// `lengths` at the condensed coupling's checkpoint.
+    lengths_ck: Vec<T>,
     pub rhs_evals: u64,
     /// Condensed coupling: segment re-integrations (local iterations) so far.
     pub retries: u64,
@@ -132,6 +137,8 @@ impl<T: Real> PassBuf<T> {
             theta: vec![T::zero(); plan.params.len()],
             res: vec![T::zero(); plan.n_unknowns],
             holes: plan.cables.iter().map(|c| vec![z; c.len]).collect(),
+            lengths: vec![T::zero(); plan.cables.len()],
+            lengths_ck: vec![T::zero(); plan.cables.len()],
             rhs_evals: 0,
             retries: 0,
             local_tol: LOCAL_TOL,
@@ -275,6 +282,7 @@ pub(crate) fn pass<T: Real>(
             },
         );
     }
+    buf.lengths.iter_mut().for_each(|l| *l = T::zero());
     for e in plan.start_events.clone() {
         apply_event(
             plan,
@@ -304,11 +312,19 @@ pub(crate) fn pass<T: Real>(
                 if let Some(r) = rec.as_deref_mut() {
                     push_sample(r, iv.s0, &y, &c);
                 }
+                // continuously routed tendons over this interval
+                let act = continuous::active(plan, buf, iv, load_scale);
                 match plan.integrator {
                     crate::settings::Integrator::Rk4 { .. } => {
                         let h = (iv.s1 - iv.s0) / iv.steps as f64;
                         for k in 0..iv.steps {
-                            y = rk4_step(&y, h, &c);
+                            y = match &act {
+                                Some(a) => {
+                                    let s = iv.s0 + h * k as f64;
+                                    continuous::rk4_step(plan, &y, s, h, &c, a, &mut buf.lengths)
+                                }
+                                None => rk4_step(&y, h, &c),
+                            };
                             buf.rhs_evals += 4;
                             if T::DIRS > 0
                                 && buf.watch
@@ -326,7 +342,15 @@ pub(crate) fn pass<T: Real>(
                         let mut s = iv.s0;
                         while s < iv.s1 {
                             let h = h_adapt.min(iv.s1 - s);
-                            let out = dp45_step(&y, h, &c, tol, &scale);
+                            let (out, inc) = match &act {
+                                Some(a) => {
+                                    continuous::dp45_step(plan, &y, s, h, &c, a, tol, &scale)
+                                }
+                                None => (
+                                    dp45_step(&y, h, &c, tol, &scale),
+                                    [T::zero(); continuous::MAX_ROUTED],
+                                ),
+                            };
                             buf.rhs_evals += 7;
                             steps_taken += 1;
                             if steps_taken > max_steps {
@@ -335,6 +359,9 @@ pub(crate) fn pass<T: Real>(
                             let err = if out.err.is_finite() { out.err } else { 1e10 };
                             if err <= 1.0 {
                                 y = out.y;
+                                if let Some(a) = &act {
+                                    continuous::commit(plan, a, &inc, &mut buf.lengths);
+                                }
                                 if T::DIRS > 0
                                     && buf.watch
                                     && buf.conjugate_at.is_none()
@@ -371,6 +398,9 @@ pub(crate) fn pass<T: Real>(
                 if !y.is_finite() {
                     return Err(PassError::NonFinite(iv.s1));
                 }
+                if act.is_some() {
+                    continuous::terminate(plan, buf, iv, &mut y, load_scale);
+                }
                 iv.events.start
             }
         };
@@ -387,6 +417,8 @@ pub(crate) fn pass<T: Real>(
                         // re-integrate the segment with the updated next holes
                         buf.retries += 1;
                         y = ck.y;
+                        // continuous tendons' lengths as they were at the checkpoint
+                        buf.lengths.clone_from_slice(&buf.lengths_ck);
                         h_adapt = ck.h_adapt;
                         if let Some(r) = rec.as_deref_mut() {
                             r.samples.truncate(ck.samples);
@@ -401,6 +433,7 @@ pub(crate) fn pass<T: Real>(
                     if T::DIRS == 0 {
                         transport_next(plan, buf, &y, g);
                     }
+                    buf.lengths_ck.clone_from_slice(&buf.lengths);
                     check = Some(Checkpoint {
                         g,
                         iv: i,

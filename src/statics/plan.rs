@@ -5,6 +5,7 @@
 //! Structure (intervals, events, unknowns) depends on the robot, the settings and
 //! which loads exist; the load *values* can be updated in place without allocating.
 
+use super::continuous::RoutedCable;
 use crate::error::ModelError;
 use crate::integrate::Coeffs;
 use crate::loads::{Frame, Loads};
@@ -76,8 +77,13 @@ pub(crate) struct PlanCable {
     pub hole_local: Vec<Vector3<f64>>,
     /// Number of disks on the route.
     pub len: usize,
-    /// Arc length of the termination disk (m).
+    /// Arc length of the termination disk, or a continuous tendon's end (m).
     pub end_s: f64,
+    /// Local position of the cable where it ends (m): its last hole, or a continuous
+    /// tendon's path there.
+    pub end_hole: Vector3<f64>,
+    /// Continuously routed (`crate::statics::continuous`): no disks, no chords.
+    pub routed: bool,
     /// Index of the first hole unknown (route disk 1) when tensioned.
     pub unknowns: Option<usize>,
     /// Tension of chord `k` (ending at route disk `k`; chord 0 starts at the base
@@ -132,6 +138,8 @@ pub(crate) struct Plan {
     pub max_local: usize,
     /// Largest `3 * pending[g].len()`: the size of a segment's local iteration.
     pub max_pending_dirs: usize,
+    /// Continuously routed cables (see `statics::continuous`).
+    pub routed: Vec<RoutedCable>,
 }
 
 /// Tensioned cables through one disk that the condensed coupling handles. A dual
@@ -319,7 +327,12 @@ impl Plan {
                 hole_local: c.hole_local.clone(),
                 factor: vec![1.0; c.route.len()],
                 len: c.route.len(),
-                end_s: robot.guides()[c.route[c.route.len() - 1]].s,
+                end_s: c.end_s,
+                end_hole: c
+                    .path
+                    .as_ref()
+                    .map_or_else(|| c.hole_local[c.route.len() - 1], |p| p.eval(c.end_s)[0]),
+                routed: c.path.is_some(),
                 unknowns,
             });
         }
@@ -365,6 +378,18 @@ impl Plan {
             pending,
             max_local,
             max_pending_dirs,
+            routed: robot
+                .cables()
+                .iter()
+                .enumerate()
+                .filter_map(|(j, c)| {
+                    c.path.as_ref().map(|p| RoutedCable {
+                        cable: j,
+                        path: p.clone(),
+                        end_s: c.end_s,
+                    })
+                })
+                .collect(),
         };
         plan.points = loads
             .point
@@ -462,7 +487,7 @@ impl Plan {
         }
         for c in &self.cables {
             if c.tension > 0.0 {
-                let p = at(c.end_s) + self.base_rot * c.hole_local[c.len - 1];
+                let p = at(c.end_s) + self.base_rot * c.end_hole;
                 add(p, -axis * (c.tension * load_scale), Vector3::zeros());
             }
         }

@@ -6,7 +6,7 @@ use super::intensity::load_intensity;
 use super::pass::{pass, PassBuf, Recording, LOCAL_TOL};
 use super::plan::{ParamSite, Plan};
 use super::{GuidePose, Solution, SolveReport, SolveStatus};
-use crate::cables::{path_length, segments, CableLength};
+use crate::cables::{segments, CableLength};
 use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::math::{DenseLu, Dual};

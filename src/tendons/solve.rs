@@ -167,7 +167,7 @@ impl TendonWorkspace {
                     driven.push(j);
                     mech.push(m);
                     columns.push(c.reading.clone());
-                    let s_end = robot.guides()[*c.route.last().unwrap_or(&0)].s;
+                    let s_end = c.end_s;
                     geo.push((c.base_hole.norm().powi(2) * s_end / ei).max(1e-12));
                 }
                 Actuation::Passive => {

@@ -1,6 +1,7 @@
 //! What a solve hands out: unknowns, residuals, cable lengths, base wrench, tip and
 //! the full [`Solution`].
 
+use super::super::continuous::cable_length;
 use super::*;
 
 impl Workspace {
@@ -37,8 +38,8 @@ impl Workspace {
     /// Cable lengths of the last evaluated point (m), indexed like `robot.cables`.
     /// No allocation.
     pub fn cable_lengths_into(&self, out: &mut [f64]) {
-        for (j, (c, o)) in self.plan.cables.iter().zip(out.iter_mut()).enumerate() {
-            *o = path_length(&c.base_hole, &self.b64.holes[j]);
+        for (j, o) in out.iter_mut().enumerate().take(self.plan.cables.len()) {
+            *o = cable_length(&self.plan, &self.b64, j);
         }
     }
 
@@ -86,8 +87,12 @@ impl Workspace {
             .enumerate()
             .map(|(j, (c, pc))| CableLength {
                 name: c.name.clone(),
-                total_m: path_length(&pc.base_hole, &self.b64.holes[j]),
-                segments_m: segments(&pc.base_hole, &self.b64.holes[j]),
+                total_m: cable_length(&self.plan, &self.b64, j),
+                segments_m: if pc.routed {
+                    vec![self.b64.lengths[j]]
+                } else {
+                    segments(&pc.base_hole, &self.b64.holes[j])
+                },
             })
             .collect();
         let (base_force, base_moment) = self.base_wrench();

@@ -1,6 +1,7 @@
 //! Implicit-differentiation sensitivities of the cable lengths to the load
 //! parameters `theta` at a converged point.
 
+use super::super::continuous::cable_length;
 use super::*;
 
 impl Workspace {
@@ -64,7 +65,7 @@ impl Workspace {
             }
         }
         for j in 0..c {
-            let len = path_length(&self.plan.cables[j].base_hole, &self.b64.holes[j]);
+            let len = cable_length(&self.plan, &self.b64, j);
             if let Some(l) = lengths.get_mut(j) {
                 *l = len;
             }

@@ -2,9 +2,9 @@
 //! `[x; theta]`, and the buffers of the condensed coupling (whose passes carry
 //! [`JUMP_DIRS`] local directions besides the outer ones, see `statics::pass`).
 
+use super::super::continuous::cable_length;
 use super::super::pass::{pass, PassBuf};
 use super::super::plan::{Plan, JUMP_DIRS};
-use crate::cables::path_length_t;
 use crate::math::Dual;
 
 /// Outer directions of the narrow condensed buffer (the shooting Jacobian, `n <= 6`).
@@ -131,8 +131,8 @@ pub(in crate::statics) fn sweep<const N: usize>(
         }
     }
     if !jac_m.is_empty() {
-        for (j, c) in plan.cables.iter().enumerate() {
-            let l = path_length_t(&c.base_hole.map(Dual::constant), &buf.holes[j]);
+        for j in 0..plan.cables.len() {
+            let l = cable_length(plan, buf, j);
             for k in 0..width {
                 jac_m[j * w + c0 + k] = l.d[k];
             }
