@@ -405,7 +405,7 @@ fn cable_deltas_20k_rows_with_faults() {
 
 /// The full soak: `cargo test --release --test soak_faults -- --ignored --nocapture`.
 #[test]
-#[ignore = "a million rows: 18 minutes on 2 busy shared cores; figures in benches/README.md"]
+#[ignore = "a million rows: 4-18 minutes on 2 shared cores; figures in benches/README.md"]
 fn cable_deltas_million_rows_with_faults() {
     soak(
         "data/scenes/track_demo.toml",
