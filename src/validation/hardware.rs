@@ -172,6 +172,7 @@ impl HardwareBenchmark {
             warnings: self.failed_rows.clone(),
             input_names: self.input_names.clone(),
             rows: self.rows.clone(),
+            failed_rows: Vec::new(),
         }
     }
 }
