@@ -24,6 +24,7 @@ mod fit;
 mod frame;
 mod identify;
 mod identify_assign;
+mod jacobian;
 mod lm;
 mod model;
 mod problem;
@@ -47,6 +48,7 @@ pub use identify_assign::{
     identify, identify_file, identify_recording, IdentifyResult, SegmentProposal, ServoEvidence,
     SwapMargin,
 };
+pub use jacobian::residuals_and_jacobian;
 pub use lm::{
     central_differences, levenberg_marquardt, Bounds, Huber, LeastSquares, LmIteration, LmResult,
     LmSettings, LmStatus,

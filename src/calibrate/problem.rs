@@ -71,6 +71,44 @@ fn run_chunks<M: CalibrationModel, T: Send>(
     })
 }
 
+impl<'a, M: CalibrationModel + Clone> Problem<'a, M> {
+    /// A problem over `rows` with one model clone per chunk of rows (`threads`), at
+    /// the full parameter vector `full` (scene values, then [`super::frame_param_names`]),
+    /// unknowns `full[k] / scale[k]`, finite-difference steps `steps` (scene units),
+    /// capture noise `noise` (m); nothing free, no priors, the failed-row set open.
+    pub(super) fn new(
+        model: &M,
+        rows: &'a [RecordingRow],
+        full: Vec<f64>,
+        scale: Vec<f64>,
+        steps: Vec<f64>,
+        noise: f64,
+        threads: usize,
+    ) -> Self {
+        let chunks = chunks(rows.len(), threads);
+        Self {
+            models: vec![model.clone(); chunks.len()],
+            chunks,
+            rows,
+            ns: steps.len(),
+            full,
+            free: Vec::new(),
+            scale,
+            priors: Vec::new(),
+            noise,
+            steps,
+            poses: Vec::new(),
+            poses_at: None,
+            sens: Sensitivities::default(),
+            sens_at: None,
+            fd_disagreement: Vec::new(),
+            excluded: vec![false; rows.len()],
+            exclusions: Vec::new(),
+            locked: false,
+        }
+    }
+}
+
 impl<M: CalibrationModel> Problem<'_, M> {
     pub(super) fn scene_values(&self, full: &[f64]) -> Vec<f64> {
         full[..self.ns].to_vec()

@@ -8,8 +8,8 @@ use super::fit::{
 };
 use super::frame::{kabsch, RigidTransform};
 use super::lm::{levenberg_marquardt, Bounds, Huber, LmSettings, LmStatus};
-use super::model::{CalibrationModel, Sensitivities};
-use super::problem::{chunks, rms, spread, Problem};
+use super::model::CalibrationModel;
+use super::problem::{rms, spread, Problem};
 use super::recording::Recording;
 use super::stats::{parameter_statistics, TipErrors};
 use super::CalibrationError;
@@ -82,8 +82,6 @@ pub fn calibrate<M: CalibrationModel + Clone>(
     }
     let ns = params.len();
     let rows = &train.rows[..];
-    let ch = chunks(rows.len(), settings.threads);
-    let models = vec![model.clone(); ch.len()];
     let mut full: Vec<f64> = params
         .iter()
         .map(|p| p.initial.clamp(p.lower, p.upper))
@@ -108,26 +106,16 @@ pub fn calibrate<M: CalibrationModel + Clone>(
         .enumerate()
         .filter_map(|(k, p)| p.prior.map(|(m, s)| (k, m, s)))
         .collect();
-    let mut pb = Problem {
-        models,
-        chunks: ch,
+    let steps = params.iter().map(|p| settings.fd_step * p.scale).collect();
+    let mut pb = Problem::new(
+        model,
         rows,
-        ns,
-        full: full.clone(),
-        free: Vec::new(),
-        scale: scale.clone(),
-        priors: Vec::new(),
-        noise: settings.capture_noise_m,
-        steps: params.iter().map(|p| settings.fd_step * p.scale).collect(),
-        poses: Vec::new(),
-        poses_at: None,
-        sens: Sensitivities::default(),
-        sens_at: None,
-        fd_disagreement: Vec::new(),
-        excluded: vec![false; rows.len()],
-        exclusions: Vec::new(),
-        locked: false,
-    };
+        full.clone(),
+        scale.clone(),
+        steps,
+        settings.capture_noise_m,
+        settings.threads,
+    );
     let mut warnings = Vec::new();
     for (i, p) in params.iter().enumerate() {
         if params[..i].iter().any(|q| q.name == p.name) {
