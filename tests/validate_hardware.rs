@@ -78,6 +78,15 @@ fn validate_prints_the_hardware_table_and_exits_zero() {
     assert!((published[2] - 6.49).abs() < 0.01);
     assert_eq!(row("published model, train, offset rm.")[1], 9.7);
     assert!(stdout.contains("below the published 12.1 mm: yes"));
+    // the warm-started `track` chain on val: the same figure (within 1 %, the
+    // benchmark's check; the chains agree to 1e-11 m, tests/hardware_ftdcr.rs)
+    let track = row("val, track chain (warm, as `track`), mean offset removed");
+    assert_eq!(track[0], 443.0);
+    assert!(
+        (track[1] - val[1]).abs() <= 0.01 * val[1],
+        "{track:?} vs {val:?}"
+    );
+    assert!(stdout.contains("track chain on val: 443 rows, 0 not converged"));
     let svg = std::fs::read_to_string(out.join("hardware_ftdcr_v4.svg")).unwrap();
     assert!(svg.starts_with("<svg") || svg.contains("<svg"));
     let _ = std::fs::remove_dir_all(&out);

@@ -138,6 +138,11 @@ pub enum LmStatus {
     /// No damping produced a decrease (flat or invalid neighbourhood): the best point
     /// so far.
     Stalled,
+    /// Not produced by [`levenberg_marquardt`]: a calibration
+    /// ([`super::calibrate`]) found more rows whose forward solve fails than its
+    /// `max_failed_fraction` allows and took no step. The values are the start
+    /// values; not a fit.
+    TooManyFailedRows,
 }
 
 /// One step of the iteration, for progress display.

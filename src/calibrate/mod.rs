@@ -24,17 +24,20 @@ mod fit;
 mod frame;
 mod identify;
 mod identify_assign;
+mod jacobian;
 mod lm;
 mod model;
+mod problem;
 mod readings_model;
 mod recording;
 mod report;
+mod run;
 mod spec;
 mod stats;
 
 pub use fit::{
-    calibrate, frame_param_names, CalibrationReport, CalibrationSettings, CalibrationSetup,
-    FitParam, FittedParam, FrameSetup, Progress, RowResult, Split, Stage,
+    CalibrationReport, CalibrationSettings, FailedRow, FitParam, FittedParam, FrameSetup, Progress,
+    RowResult, Split, Stage,
 };
 pub use frame::{kabsch, rotation_vector, umeyama, RigidTransform};
 pub use identify::{
@@ -45,14 +48,16 @@ pub use identify_assign::{
     identify, identify_file, identify_recording, IdentifyResult, SegmentProposal, ServoEvidence,
     SwapMargin,
 };
+pub use jacobian::residuals_and_jacobian;
 pub use lm::{
     central_differences, levenberg_marquardt, Bounds, Huber, LeastSquares, LmIteration, LmResult,
     LmSettings, LmStatus,
 };
-pub use model::{finite_differences, CalibrationModel, Sensitivities, TensionModel};
+pub use model::{finite_differences, CalibrationModel, RowFailure, Sensitivities, TensionModel};
 pub use readings_model::{ReadingsModel, SceneModel};
 pub use recording::{is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow};
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
+pub use run::{calibrate, frame_param_names, CalibrationSetup};
 pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec};
 pub use stats::{
     parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,

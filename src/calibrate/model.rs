@@ -9,9 +9,10 @@ use super::recording::RecordingRow;
 use super::CalibrationError;
 use crate::files::Scene;
 use crate::loads::Loads;
-use crate::statics::{Pose, Start, Workspace};
+use crate::statics::{Pose, SolveStatus, Start, Workspace};
 use crate::validation::{set_values, ParamPath};
 use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
 
 /// A model to calibrate: given parameter values, predict each row's marker body pose.
 ///
@@ -29,11 +30,49 @@ pub trait CalibrationModel: Send {
     /// warm-started from the previously predicted row.
     fn predict(&mut self, row: &RecordingRow) -> Result<Pose, CalibrationError>;
 
+    /// [`CalibrationModel::predict`] that survives a row whose forward solve does not
+    /// converge ([`CalibrationError::NotConverged`]): the model is restarted and the
+    /// row solved once more from cold; if that fails too, the row's failure is
+    /// returned (`Ok(Err(..))`) and the model is left restarted, so the next row
+    /// starts cold, not from the failed state. Other errors (an invalid scene or
+    /// reading) are returned as errors.
+    fn predict_retrying(
+        &mut self,
+        row: &RecordingRow,
+    ) -> Result<Result<Pose, RowFailure>, CalibrationError> {
+        match self.predict(row) {
+            Err(CalibrationError::NotConverged { .. }) => {
+                self.restart();
+                match self.predict(row) {
+                    Ok(p) => Ok(Ok(p)),
+                    Err(CalibrationError::NotConverged {
+                        line,
+                        status,
+                        residual,
+                    }) => {
+                        self.restart();
+                        Ok(Err(RowFailure {
+                            line,
+                            status,
+                            residual,
+                        }))
+                    }
+                    Err(e) => Err(e),
+                }
+            }
+            Ok(p) => Ok(Ok(p)),
+            Err(e) => Err(e),
+        }
+    }
+
     /// Poses of `rows` at `values` and their sensitivities to each parameter.
     /// `steps[k]` is a finite-difference step for parameter `k` (its unit). Default:
     /// [`finite_differences`] (central differences, each checked against the forward
     /// difference). A model with exact sensitivities overrides this and leaves
-    /// [`Sensitivities::fd_disagreement`] empty. Must leave the model at `values`.
+    /// [`Sensitivities::fd_disagreement`] empty. A row whose solve fails (after the
+    /// cold retry of [`CalibrationModel::predict_retrying`]) at `values` or at a
+    /// perturbed value is listed in [`Sensitivities::failed`]. Must leave the model
+    /// at `values`.
     fn sensitivities(
         &mut self,
         values: &[f64],
@@ -61,10 +100,26 @@ pub struct Sensitivities {
     /// the largest |central| or |forward difference| (a check of the finite differences; large
     /// values mean noise or a kink). Empty for exact sensitivities.
     pub fd_disagreement: Vec<f64>,
+    /// Rows (index into the `rows` given) whose solve failed at the values or at a
+    /// perturbed value, with the first failure; their pose and derivatives are zero
+    /// and must not be used.
+    pub failed: Vec<(usize, RowFailure)>,
+}
+
+/// A row whose forward solve did not converge, even from cold.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RowFailure {
+    /// Line of the row in its file.
+    pub line: usize,
+    /// Status of the cold retry.
+    pub status: SolveStatus,
+    /// Its residual (the model's unit: scaled boundary residual, or m for tendons).
+    pub residual: f64,
 }
 
 impl Sensitivities {
     fn resize(&mut self, rows: usize, params: usize) {
+        self.failed.clear();
         self.params = params;
         self.poses.resize(rows, identity_pose());
         self.d_position.resize(rows * params, Vector3::zeros());
@@ -72,21 +127,32 @@ impl Sensitivities {
     }
 }
 
-fn identity_pose() -> Pose {
+pub(super) fn identity_pose() -> Pose {
     Pose {
         position: Vector3::zeros(),
         rotation: Matrix3::identity(),
     }
 }
 
+/// Predict `rows` in sequence from cold; a row that fails (after the cold retry)
+/// gets the identity pose and is added to `failed` (if not yet there).
 fn predict_all<M: CalibrationModel + ?Sized>(
     m: &mut M,
     rows: &[RecordingRow],
     out: &mut [Pose],
+    failed: &mut Vec<(usize, RowFailure)>,
 ) -> Result<(), CalibrationError> {
     m.restart();
-    for (row, o) in rows.iter().zip(out.iter_mut()) {
-        *o = m.predict(row)?;
+    for (i, (row, o)) in rows.iter().zip(out.iter_mut()).enumerate() {
+        match m.predict_retrying(row)? {
+            Ok(p) => *o = p,
+            Err(f) => {
+                *o = identity_pose();
+                if !failed.iter().any(|(j, _)| *j == i) {
+                    failed.push((i, f));
+                }
+            }
+        }
     }
     Ok(())
 }
@@ -104,7 +170,8 @@ pub fn finite_differences<M: CalibrationModel + ?Sized>(
     out.resize(rows.len(), n);
     out.fd_disagreement = vec![0.0; n];
     m.set_params(values)?;
-    predict_all(m, rows, &mut out.poses)?;
+    let mut failed = Vec::new();
+    predict_all(m, rows, &mut out.poses, &mut failed)?;
     let mut plus = vec![identity_pose(); rows.len()];
     let mut minus = vec![identity_pose(); rows.len()];
     let mut x = values.to_vec();
@@ -112,13 +179,18 @@ pub fn finite_differences<M: CalibrationModel + ?Sized>(
         let h = steps[k];
         x[k] = values[k] + h;
         m.set_params(&x)?;
-        predict_all(m, rows, &mut plus)?;
+        predict_all(m, rows, &mut plus, &mut failed)?;
         x[k] = values[k] - h;
         m.set_params(&x)?;
-        predict_all(m, rows, &mut minus)?;
+        predict_all(m, rows, &mut minus, &mut failed)?;
         x[k] = values[k];
         let (mut worst, mut size) = (0.0f64, 0.0f64);
         for i in 0..rows.len() {
+            if failed.iter().any(|(j, _)| *j == i) {
+                out.d_position[i * n + k] = Vector3::zeros();
+                out.d_rotation[i * n + k] = Vector3::zeros();
+                continue;
+            }
             let central = (plus[i].position - minus[i].position) / (2.0 * h);
             let forward = (plus[i].position - out.poses[i].position) / h;
             worst = worst.max((central - forward).norm());
@@ -129,6 +201,17 @@ pub fn finite_differences<M: CalibrationModel + ?Sized>(
         }
         out.fd_disagreement[k] = if size > 0.0 { worst / size } else { 0.0 };
     }
+    // a row that failed only at a perturbed value failed after its derivative
+    // columns of earlier parameters were written: zero them too
+    failed.sort_by_key(|(i, _)| *i);
+    for (i, _) in &failed {
+        out.poses[*i] = identity_pose();
+        for k in 0..n {
+            out.d_position[i * n + k] = Vector3::zeros();
+            out.d_rotation[i * n + k] = Vector3::zeros();
+        }
+    }
+    out.failed = failed;
     m.set_params(values)?;
     Ok(())
 }

@@ -44,7 +44,9 @@ pub fn calibrated_scene(
 }
 
 /// Write one CSV line per row: split, line, time, measured (capture and base frame),
-/// model (base frame), error vector and norm (m), IRLS weight, the inputs.
+/// model (base frame), error vector and norm (m), IRLS weight, status (`ok`, or the
+/// solve status of a row left out because its solve failed even from cold: then
+/// the numbers are empty), the inputs (empty for failed rows).
 pub fn write_residuals_csv(
     path: &Path,
     report: &CalibrationReport,
@@ -57,7 +59,7 @@ pub fn write_residuals_csv(
     let mut header = String::from(
         "split,line,t_s,measured_capture_x_m,measured_capture_y_m,measured_capture_z_m,\
          measured_base_x_m,measured_base_y_m,measured_base_z_m,model_x_m,model_y_m,model_z_m,\
-         error_x_m,error_y_m,error_z_m,error_m,weight",
+         error_x_m,error_y_m,error_z_m,error_m,weight,status",
     );
     for n in &report.input_names {
         header.push(',');
@@ -84,11 +86,27 @@ pub fn write_residuals_csv(
         {
             let _ = write!(line, ",{v:.9e}");
         }
-        let _ = write!(line, ",{:.9e},{}", e.norm(), r.weight);
+        let _ = write!(line, ",{:.9e},{},ok", e.norm(), r.weight);
         for v in &r.inputs {
             let _ = write!(line, ",{v}");
         }
         writeln!(f, "{line}").map_err(io)?;
+    }
+    for r in &report.failed_rows {
+        let split = match r.split {
+            Split::Train => "train",
+            Split::Val => "val",
+        };
+        // 15 empty cells: t_s, measured (capture, base), model, error (3 each), norm,
+        // weight
+        writeln!(
+            f,
+            "{split},{},{}{}",
+            r.line,
+            ",".repeat(15),
+            r.status_name()
+        )
+        .map_err(io)?;
     }
     f.flush().map_err(io)
 }
@@ -341,6 +359,17 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
             s,
             r#"<text x="20" y="60" font-size="11">{}</text>"#,
             esc(&line(v, "val"))
+        );
+    }
+    if !report.failed_rows.is_empty() {
+        let _ = writeln!(
+            s,
+            r#"<text x="20" y="92" font-size="11" fill="{MODEL}">{}</text>"#,
+            esc(&format!(
+                "{} rows left out, their solve failed even from cold: {}",
+                report.failed_rows.len(),
+                super::FailedRow::list(&report.failed_rows, 12)
+            ))
         );
     }
     let _ = writeln!(

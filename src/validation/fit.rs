@@ -438,7 +438,8 @@ fn levenberg_marquardt(
     let status = match res.status {
         LmStatus::Converged => FitStatus::Converged,
         LmStatus::MaxIterations => FitStatus::MaxIterations,
-        LmStatus::Stalled => FitStatus::Stalled,
+        // (not produced by the LM itself; only `calibrate` sets it)
+        LmStatus::Stalled | LmStatus::TooManyFailedRows => FitStatus::Stalled,
     };
     Ok((res.z, res.iterations, status))
 }

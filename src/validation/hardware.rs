@@ -18,6 +18,7 @@
 //! in-sample, while the published 9.7 mm is over all 1620 train rows. Solving all
 //! 1620 would cost ~20 s on every `validate`, so it is not done.
 
+use super::track_chain::{track_errors, TrackErrors};
 use crate::calibrate::{
     CalibrationError, CalibrationModel, CalibrationReport, ColumnMap, LmStatus, ParamStatistics,
     ReadingsModel, Recording, RigidTransform, RowResult, Split, TipErrors,
@@ -75,6 +76,15 @@ pub struct HardwareSettings {
     /// Largest relative difference between the recomputed and the stored val RMSE
     /// (mean offset removed) for the check to pass (default 0.1).
     pub stored_tolerance: f64,
+    /// Also run val.csv through the warm-started chain of `track`
+    /// ([`super::track_errors`]) (default true).
+    pub track: bool,
+    /// Largest relative difference between the `track` chain's val RMSE and the
+    /// calibrated solve's (mean offset removed) for the check to pass (default
+    /// 0.01: both converge every row to the solvers' tolerances, 1e-12 m and 1e-10
+    /// scaled, so on one branch they agree to far less; 1 % allows a row or two on
+    /// another branch after a failure).
+    pub track_tolerance: f64,
 }
 
 impl Default for HardwareSettings {
@@ -82,6 +92,8 @@ impl Default for HardwareSettings {
         Self {
             train_stride: 5,
             stored_tolerance: 0.1,
+            track: true,
+            track_tolerance: 0.01,
         }
     }
 }
@@ -124,6 +136,8 @@ pub struct HardwareBenchmark {
     pub capture_to_base: RigidTransform,
     /// Marker offset (m, tip frame).
     pub marker_offset_m: Vector3<f64>,
+    /// The val errors of the warm-started `track` chain (`None` when not run).
+    pub track: Option<TrackErrors>,
 }
 
 impl HardwareBenchmark {
@@ -140,10 +154,21 @@ impl HardwareBenchmark {
     pub fn beats_published(&self) -> bool {
         self.val.mean_removed.rmse_m < self.published.val_rmse_m
     }
+    /// The `track` chain's val RMSE (mean offset removed) is within the tolerance of
+    /// the calibrated solve's (true when the chain was not run).
+    pub fn track_agrees(&self) -> bool {
+        self.track.as_ref().is_none_or(|t| {
+            let (a, b) = (t.errors.mean_removed.rmse_m, self.val.mean_removed.rmse_m);
+            (a - b).abs() <= self.settings.track_tolerance * b
+        })
+    }
     /// Every check passes: all rows solved, the stored figure reproduced, the
-    /// published one beaten.
+    /// published one beaten, the `track` chain agreeing.
     pub fn passed(&self) -> bool {
-        self.failed_rows.is_empty() && self.reproduces_stored() && self.beats_published()
+        self.failed_rows.is_empty()
+            && self.reproduces_stored()
+            && self.beats_published()
+            && self.track_agrees()
     }
 
     /// A [`CalibrationReport`] of the recomputed rows (no fit statistics), so that
@@ -172,6 +197,7 @@ impl HardwareBenchmark {
             warnings: self.failed_rows.clone(),
             input_names: self.input_names.clone(),
             rows: self.rows.clone(),
+            failed_rows: Vec::new(),
         }
     }
 }
@@ -212,7 +238,15 @@ pub fn shipped_hardware_benchmark(
     } else {
         None
     };
-    hardware_benchmark(&scene, &stored, train.as_ref(), &val, settings)
+    let mut b = hardware_benchmark(&scene, &stored, train.as_ref(), &val, settings)?;
+    if settings.track {
+        b.track = Some(track_errors(
+            &scene,
+            "data/hardware/ftdcr_v4/val.csv",
+            VAL_CSV,
+        )?);
+    }
+    Ok(b)
 }
 
 /// The column map of a calibrated scene (its `[calibration]` table, required).
@@ -301,5 +335,6 @@ pub fn hardware_benchmark(
         input_names: val.input_names.clone(),
         capture_to_base: frame,
         marker_offset_m: offset,
+        track: None,
     })
 }

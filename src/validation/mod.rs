@@ -23,6 +23,7 @@ mod inverse;
 mod inverse_loo;
 mod param;
 mod tables;
+mod track_chain;
 
 pub use compare::{
     compare, simulate, Comparison, LengthRow, LengthSummary, PointRow, PointSummary, RowComparison,
@@ -38,6 +39,7 @@ pub use inverse::{table_4_5_inverse, table_4_5_inverse_from, InverseRow, READING
 pub use inverse_loo::{table_4_5_loo, LooRow, TableRowModel, LOO_PARAMS, TIP_SIGMA_M, Z95};
 pub use param::{set_params, set_values, ParamPath};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
+pub use track_chain::{track_errors, ChainStep, TrackChain, TrackErrors};
 
 use crate::error::ModelError;
 use crate::files::thesis::TableError;

@@ -470,6 +470,21 @@ fn print_report(r: &CalibrationReport, secs: f64) {
     if let Some(v) = &r.val {
         show("val", v);
     }
+    if !r.failed_rows.is_empty() {
+        println!("failed rows (left out: the forward solve failed even from cold):");
+        for f in &r.failed_rows {
+            println!(
+                "  {:<5} line {:>6}: {} (residual {:.2e})",
+                match f.split {
+                    cablesense::calibrate::Split::Train => "train",
+                    cablesense::calibrate::Split::Val => "val",
+                },
+                f.line,
+                f.status_name(),
+                f.residual
+            );
+        }
+    }
     for w in &r.warnings {
         println!("warning: {w}");
     }

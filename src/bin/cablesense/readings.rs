@@ -96,13 +96,16 @@ pub fn stream(
     output: Output,
     mut samples: Option<&mut dyn Write>,
 ) -> anyhow::Result<(usize, usize, usize)> {
-    let mut ws = scene
+    let ws = scene
         .tendon_workspace()
         .with_context(|| format!("{}: building the tendon model", scene_path.display()))?;
     let mut parser: ReadingsParser = scene.readings_parser(&ws);
+    // warm row to row; a row that does not converge is not the next row's warm start
+    let mut chain = cablesense::validation::TrackChain::new(ws);
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     if output == Output::Text {
+        let ws = chain.workspace();
         let robot = ws.workspace().robot();
         let names: Vec<String> = ws
             .driven()
@@ -116,10 +119,6 @@ pub fn stream(
         writeln!(w, "line,s_m,x_m,y_m,z_m")?;
     }
     let (mut solved, mut converged, mut bad) = (0, 0, 0);
-    // the workspace after the last converged row, whole (shooting unknowns, settled
-    // holes, reused Jacobians): a row that does not converge is rolled back to it, so
-    // the rows after it see exactly what they would without it
-    let mut good: Option<TendonWorkspace> = None;
     for (i, line) in reader.lines().enumerate() {
         let line = match line {
             Ok(l) => l,
@@ -139,8 +138,8 @@ pub fn stream(
             }
         };
         let t0 = std::time::Instant::now();
-        let rep = match ws.solve_readings(&row.readings_m) {
-            Ok(r) => r,
+        let (rep, fallback) = match chain.step(&row.readings_m) {
+            Ok(s) => (s.report, s.fallback),
             Err(e) => {
                 bad += 1;
                 emit_error(&mut out, output, row.line, "readings", &e.to_string())?;
@@ -150,31 +149,22 @@ pub fn stream(
         let elapsed = t0.elapsed().as_secs_f64();
         solved += 1;
         converged += usize::from(rep.status.is_converged());
-        // a row that did not converge must not become the next row's warm start:
-        // after printing it, the last converged row is solved again (warm from here)
-        let fallback = !rep.status.is_converged() && good.is_some();
+        // (a row that did not converge is not the next row's warm start: the chain
+        // solves the last converged row again before the next one)
+        let ws = chain.workspace_mut();
         match output {
             Output::Json => {
-                let mut record = row_json(&ws, &row, &rep, elapsed);
+                let mut record = row_json(ws, &row, &rep, elapsed);
                 record["fallback"] = json!(fallback);
                 writeln!(out, "{record}")?
             }
-            Output::Text => writeln!(out, "{}", row_text(&ws, &row, &rep))?,
+            Output::Text => writeln!(out, "{}", row_text(ws, &row, &rep))?,
         }
         if let Some(w) = samples.as_deref_mut() {
             let sol = ws.workspace_mut().solution();
             for s in &sol.samples {
                 writeln!(w, "{},{},{},{},{}", row.line, s.s, s.r.x, s.r.y, s.r.z)?;
             }
-        }
-        if rep.status.is_converged() {
-            match good.as_mut() {
-                Some(g) => g.clone_from(&ws),
-                None => good = Some(ws.clone()),
-            }
-        } else if let Some(g) = &good {
-            // roll back (the last good row's status is not reported: the next row's is)
-            ws.clone_from(g);
         }
         out.flush()?;
     }

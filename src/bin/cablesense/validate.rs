@@ -432,6 +432,9 @@ fn print_hardware(svg: Option<&Path>) -> anyhow::Result<bool> {
         line(&format!("{name}, mean offset removed"), &e.mean_removed);
     };
     split("val (held out)", &b.val);
+    if let Some(t) = &b.track {
+        split("val, track chain (warm, as `track`)", &t.errors);
+    }
     if let Some(t) = &b.train {
         split(
             &format!("train (fit rows, 1 in {})", settings.train_stride),
@@ -474,6 +477,18 @@ fn print_hardware(svg: Option<&Path>) -> anyhow::Result<bool> {
         p.val_rmse_m * 1e3,
         yes(b.beats_published())
     );
+    if let Some(t) = &b.track {
+        println!(
+            "  track chain on val: {} rows, {} not converged, {:.2} ms a row; RMSE {:.3} mm against the calibrated solve's {:.3} mm (within {:.0} %: {})",
+            t.rows,
+            t.not_converged,
+            t.mean_row_s * 1e3,
+            t.errors.mean_removed.rmse_m * 1e3,
+            b.val.mean_removed.rmse_m * 1e3,
+            settings.track_tolerance * 100.0,
+            yes(b.track_agrees())
+        );
+    }
     for f in b.failed_rows.iter().take(5) {
         println!("  failed: {f}");
     }

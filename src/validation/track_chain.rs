@@ -1,0 +1,164 @@
+//! Estimation on the hardware from servo readings alone, as `cablesense track`
+//! runs it: the scene's readings parser (`[readings]` table) reads each row, a
+//! [`TrackChain`] solves it warm-started from the previous row, and a row that
+//! does not converge is not the next row's warm start (the workspace is rolled back
+//! to its state after the last converged row first). [`track_errors`] sets the chain's tips
+//! (capture frame and marker offset from the scene's `[calibration]` table) against
+//! the measured ones: the same val error as the calibrated solve of
+//! [`super::hardware_benchmark`] when both chains converge every row on the same
+//! branch (they differ only in what follows a failed row: a cold restart there, the
+//! rolled-back last good row here).
+
+use crate::calibrate::{CalibrationError, CalibrationSpec, RigidTransform, TipErrors};
+use crate::error::ModelError;
+use crate::files::Scene;
+use crate::tendons::{TendonReport, TendonWorkspace};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// The warm-started chain of `track` on a tendon-driven scene.
+pub struct TrackChain {
+    ws: TendonWorkspace,
+    /// The workspace after the last converged row, whole (shooting unknowns, settled
+    /// holes, reused Jacobians), so that a rollback gives the next row exactly the
+    /// warm start it would have had without the failed row.
+    good: Option<TendonWorkspace>,
+    /// The last row did not converge: roll back to `good` before the next row.
+    restore: bool,
+}
+
+/// One row of a [`TrackChain`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChainStep {
+    /// The solve of this row.
+    pub report: TendonReport,
+    /// The row did not converge and a converged row exists: the next row starts
+    /// from that one, not from this row's state.
+    pub fallback: bool,
+}
+
+impl TrackChain {
+    /// A chain on `ws` (warm from its reference solve).
+    pub fn new(ws: TendonWorkspace) -> Self {
+        Self {
+            ws,
+            good: None,
+            restore: false,
+        }
+    }
+    /// The workspace (the state of the last row solved).
+    pub fn workspace(&self) -> &TendonWorkspace {
+        &self.ws
+    }
+    /// The workspace, mutable (e.g. to read a full solution).
+    pub fn workspace_mut(&mut self) -> &mut TendonWorkspace {
+        &mut self.ws
+    }
+    /// Solve one row (readings in m, in the workspace's tendon order), warm-started
+    /// from the previous row, or, when the previous row did not converge, from the
+    /// workspace rolled back to its whole state after the last converged row (one
+    /// clone per converged row), so rows after a failed one are bit-identical to a
+    /// stream without it. Invalid
+    /// readings are an error and leave the chain as it was.
+    pub fn step(&mut self, readings_m: &[f64]) -> Result<ChainStep, ModelError> {
+        if self.restore {
+            if let Some(g) = &self.good {
+                self.ws.clone_from(g);
+            }
+            self.restore = false;
+        }
+        let report = self.ws.solve_readings(readings_m)?;
+        let fallback = !report.status.is_converged() && self.good.is_some();
+        if report.status.is_converged() {
+            match self.good.as_mut() {
+                Some(g) => g.clone_from(&self.ws),
+                None => self.good = Some(self.ws.clone()),
+            }
+        } else {
+            self.restore = self.good.is_some();
+        }
+        Ok(ChainStep { report, fallback })
+    }
+}
+
+/// The tip errors of a [`TrackChain`] over a recording.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrackErrors {
+    /// Errors over the rows with a measured tip (all rows are solved; rows that did
+    /// not converge count with the tip they returned).
+    pub errors: TipErrors,
+    /// Rows solved.
+    pub rows: usize,
+    /// Rows that did not converge (fallback rows).
+    pub not_converged: usize,
+    /// Rows the parser rejected (line, why).
+    pub bad_rows: Vec<(usize, String)>,
+    /// Model tip per solved row with a measured tip (m, base frame, marker
+    /// offset applied), in row order.
+    pub model_m: Vec<Vector3<f64>>,
+    /// Mean wall time of a row's solve (s).
+    pub mean_row_s: f64,
+}
+
+/// Run the `track` chain of `scene` (tendon-driven, with `[readings]` mapping the
+/// measured tip and `[calibration]` giving the capture frame and marker offset)
+/// over the recording `text` (`file` names it in errors).
+pub fn track_errors(
+    scene: &Scene,
+    file: &str,
+    text: &str,
+) -> Result<TrackErrors, CalibrationError> {
+    let spec: CalibrationSpec = scene.calibration.clone().ok_or_else(|| {
+        CalibrationError::BadInput(format!(
+            "{file}: the scene has no [calibration] table (capture frame, marker offset)"
+        ))
+    })?;
+    let frame = RigidTransform::from_vector(
+        &Vector3::from(spec.capture_to_base.rotation_vector),
+        &Vector3::from(spec.capture_to_base.translation_m),
+    );
+    let offset = Vector3::from(spec.marker_offset_m);
+    let ws = scene
+        .tendon_workspace()
+        .map_err(|source| CalibrationError::Model {
+            context: "calibrated scene".into(),
+            source,
+        })?;
+    let mut parser = scene.readings_parser(&ws);
+    let mut chain = TrackChain::new(ws);
+    let (mut model, mut measured) = (Vec::new(), Vec::new());
+    let (mut rows, mut not_converged, mut bad_rows, mut time) = (0, 0, Vec::new(), 0.0);
+    for (i, line) in text.lines().enumerate() {
+        let row = match parser.line(i + 1, line) {
+            Ok(None) => continue,
+            Ok(Some(r)) => r,
+            Err(e) => {
+                bad_rows.push((e.line, e.why));
+                continue;
+            }
+        };
+        let t0 = std::time::Instant::now();
+        let step = chain
+            .step(&row.readings_m)
+            .map_err(|source| CalibrationError::Model {
+                context: format!("{file} line {}: readings", row.line),
+                source,
+            })?;
+        time += t0.elapsed().as_secs_f64();
+        rows += 1;
+        not_converged += usize::from(!step.report.status.is_converged());
+        if let Some(tip) = row.measured_tip_m {
+            let pose = *chain.workspace_mut().workspace_mut().solution().tip();
+            model.push(pose.position + pose.rotation * offset);
+            measured.push(frame.apply(&Vector3::from(tip)));
+        }
+    }
+    Ok(TrackErrors {
+        errors: TipErrors::of(&model, &measured),
+        rows,
+        not_converged,
+        bad_rows,
+        model_m: model,
+        mean_row_s: time / rows.max(1) as f64,
+    })
+}
