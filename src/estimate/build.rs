@@ -62,7 +62,7 @@ impl<M: EstimationModel> Estimator<M> {
             }
             .into());
         }
-        let c = ws.robot().cables().len();
+        let c = ws.channels();
         let names = spec
             .unknowns
             .iter()
@@ -91,6 +91,7 @@ impl<M: EstimationModel> Estimator<M> {
             len: vec![0.0; c],
             meas: vec![f64::NAN; c],
             wts: vec![0.0; c],
+            wts_in: vec![0.0; c],
             g: vec![0.0; c * p],
             len_prev: vec![0.0; c],
             h: vec![0.0; p * p],
@@ -119,7 +120,7 @@ impl<M: EstimationModel> Estimator<M> {
         };
         // reference lengths: measured, or the model at the reference loads
         if let Some(r) = &est.spec.reference_lengths_m {
-            est.ref_len.copy_from_slice(r);
+            est.ref_len[..r.len()].copy_from_slice(r);
         } else {
             let theta = est.theta.clone();
             est.ws.set_theta(&theta);
@@ -128,6 +129,12 @@ impl<M: EstimationModel> Estimator<M> {
                 return Err(EstimateError::Reference(rep.status));
             }
             est.ws.cable_lengths_into(&mut est.ref_len);
+        }
+        // load cells measure absolute tensions
+        for j in 0..c {
+            if est.ws.is_tension_channel(j) {
+                est.ref_len[j] = 0.0;
+            }
         }
         for (k, u) in est.spec.unknowns.iter().enumerate() {
             est.theta[k] = u.initial.clamp(est.lb[k], est.ub[k]);

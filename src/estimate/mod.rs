@@ -47,6 +47,9 @@
 //! cost), `iterate` (normal equations, damped step, the LM/GN/constrained loop),
 //! `sensitivity` (Broyden updates, when sensitivities are re-swept), `observe`
 //! (covariance, rank, unobservable directions, the [`Estimate`] snapshot).
+//! `tendon`: unknown external loads on a displacement-driven robot from load cells
+//! ([`TendonLoadEstimator`] over [`TendonModel`]: the same estimator with the
+//! tendon tensions as extra measurement channels).
 
 mod argmin_gn;
 mod build;
@@ -58,11 +61,15 @@ mod observe;
 mod qp;
 mod sensitivity;
 mod spec;
+mod tendon;
 mod tick;
 
 pub use joint::JointEstimator;
 pub use model::{DynModel, EstimationModel, RungModel};
 pub use spec::{Axis, EstimateSpec, Method, UnknownKind, UnknownSpec};
+pub use tendon::{
+    Prediction, TendonEstimate, TendonLoadEstimator, TendonModel, SLACK_AGREES_SIGMAS,
+};
 
 use crate::error::ModelError;
 use crate::statics::{Pose, SolveStatus, Workspace};
@@ -201,7 +208,11 @@ pub struct Estimator<M = Workspace> {
     ref_len: Vec<f64>,
     len: Vec<f64>,
     meas: Vec<f64>,
+    /// Weights of the channels at the current point: `wts_in`, with the residuals
+    /// the model drops there ([`EstimationModel::drops_residual`]) at 0.
     wts: Vec<f64>,
+    /// Weights `1/sigma^2` of the sample's measured channels (0 = not measured).
+    wts_in: Vec<f64>,
     g: Vec<f64>,
     len_prev: Vec<f64>,
     h: Vec<f64>,

@@ -166,10 +166,12 @@ impl<M: EstimationModel> Estimator<M> {
             rank: self.rank,
             condition: self.condition,
             unobservable,
+            // a dropped residual (a slack tendon's load cell) is reported as none
             residual_m: measured
                 .iter()
                 .zip(&predicted)
-                .map(|(m, pr)| m.map(|m| pr - m))
+                .zip(&self.wts)
+                .map(|((m, pr), w)| m.filter(|_| *w > 0.0).map(|m| pr - m))
                 .collect(),
             measured_m: measured,
             predicted_m: predicted,

@@ -54,19 +54,60 @@ impl<M: EstimationModel> Estimator<M> {
         let mut any = self.prior_w.iter().any(|w| *w > 0.0);
         for j in 0..self.c {
             let m = changes.get(j).copied().unwrap_or(f64::NAN);
-            let s = sigma
-                .and_then(|s| s.get(j).copied())
-                .unwrap_or(self.spec.noise_m);
+            let default = if self.ws.is_tension_channel(j) {
+                self.spec.load_cell_sigma_n
+            } else {
+                self.spec.noise_m
+            };
+            let s = sigma.and_then(|s| s.get(j).copied()).unwrap_or(default);
             if m.is_finite() && s.is_finite() && s > 0.0 {
                 self.meas[j] = m;
-                self.wts[j] = 1.0 / (s * s);
+                self.wts_in[j] = 1.0 / (s * s);
                 any = true;
             } else {
                 self.meas[j] = f64::NAN;
-                self.wts[j] = 0.0;
+                self.wts_in[j] = 0.0;
             }
+            self.wts[j] = self.wts_in[j];
         }
         any
+    }
+
+    /// The weights at the model's current point: a channel whose residual the model
+    /// drops there (a slack tendon, [`EstimationModel::drops_residual`]) weighs 0.
+    pub(super) fn apply_drops(&mut self) {
+        for j in 0..self.c {
+            let w = self.wts_in[j];
+            self.wts[j] = if w > 0.0 && self.ws.drops_residual(j, self.meas[j], 1.0 / w.sqrt()) {
+                0.0
+            } else {
+                w
+            };
+        }
+    }
+
+    /// A sample without any measurement on a model driven by inputs (a tendon
+    /// robot's readings): solve at the current estimate, which is held (no data
+    /// moves it), and report the statistics at that point: with no information,
+    /// every unknown is unobservable (rank 0, infinite standard deviation unless a
+    /// prior bounds it), status `unobservable` (or `forward_failed`). Never an
+    /// invented value.
+    pub(crate) fn tick_held(&mut self) -> EstimateStatus {
+        let t0 = Instant::now();
+        self.intake(&[], None);
+        self.iterations = 0;
+        self.jac_evals = 0;
+        self.g_valid = false;
+        self.g_exact = false;
+        self.status = if self.forward(false) {
+            self.cost = self.cost_at(false);
+            EstimateStatus::Converged
+        } else {
+            EstimateStatus::ForwardFailed
+        };
+        self.finish();
+        self.elapsed = t0.elapsed().as_secs_f64();
+        self.status
     }
 
     /// Forward solve at `theta`; lengths into `len`; `false` if it did not converge.
@@ -79,6 +120,7 @@ impl<M: EstimationModel> Estimator<M> {
         self.ws.set_theta(th);
         let rep = self.ws.solve(Start::Warm);
         self.ws.cable_lengths_into(&mut self.len);
+        self.apply_drops();
         rep.status.is_converged()
     }
 
