@@ -383,3 +383,147 @@ fn tension_unknown_on_a_driven_tendon_is_refused() {
         "{e}"
     );
 }
+
+/// The shipped demo recording `data/measurements/tdcr_load_cells.csv` is
+/// `files::load_cells::synthesize` of the shipped scene with the default recipe:
+/// regenerated and compared cell by cell (1e-12 absolute + 1e-9 relative: the file
+/// is written with 7-10 significant digits, so this is a text-level match; set
+/// `CABLESENSE_WRITE_DEMO=1` to rewrite it).
+#[test]
+fn shipped_demo_recording_is_reproduced() {
+    use cablesense::files::load_cells::{synthesize, Recipe};
+    let text = synthesize(&scene(), &Recipe::default()).expect("synthesizes");
+    let path = "data/measurements/tdcr_load_cells.csv";
+    if std::env::var("CABLESENSE_WRITE_DEMO").is_ok() {
+        std::fs::write(path, &text).unwrap();
+    }
+    let shipped = std::fs::read_to_string(path).expect("shipped recording");
+    let (a, b): (Vec<&str>, Vec<&str>) = (text.lines().collect(), shipped.lines().collect());
+    assert_eq!(a.len(), b.len());
+    assert_eq!(a[0], b[0], "header");
+    for (i, (x, y)) in a.iter().zip(&b).enumerate().skip(1) {
+        for (u, v) in x.split(',').zip(y.split(',')) {
+            let (u, v): (f64, f64) = (u.parse().unwrap(), v.parse().unwrap());
+            assert!(
+                (u - v).abs() <= 1e-12 + 1e-9 * v.abs(),
+                "line {}: {u} vs {v}",
+                i + 1
+            );
+        }
+    }
+}
+
+/// The demo recording through the estimator as `cablesense estimate` runs it (the
+/// readings parser, warm-started rows): every row converges, and the true loads
+/// (its `true_*` columns) are within 4 reported sigma on every row.
+#[test]
+fn demo_recording_is_estimated_within_its_sigma() {
+    use cablesense::files::load_cells::{estimator as scene_estimator, parser};
+    let sc = scene();
+    let mut est = scene_estimator(&sc).unwrap();
+    let mut p = parser(&sc, &mut est);
+    let text = std::fs::read_to_string("data/measurements/tdcr_load_cells.csv").unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let truth_cols: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i].starts_with("true_"))
+        .collect();
+    let mut rows = 0;
+    for (i, line) in text.lines().enumerate() {
+        let Some(row) = p.line(i + 1, line).unwrap() else {
+            continue;
+        };
+        let status = est.tick(&row.readings_m, &row.tensions_n, None).unwrap();
+        let e = est.estimate();
+        assert_eq!(status, EstimateStatus::Converged, "line {}: {e:?}", i + 1);
+        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        for (k, &c) in truth_cols.iter().enumerate() {
+            let z = (e.estimate.values[k] - cells[c]) / e.estimate.std_dev[k];
+            assert!(
+                z.abs() < 4.0,
+                "line {}: {} off by {z} sigma",
+                i + 1,
+                header[c]
+            );
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, 40);
+}
+
+/// The command line on the demo: `estimate --json` prints one record per row with
+/// the loads, their standard deviations and status, the tip, tensions and taut
+/// flags, and exits 0 (every row converged, good fit); `track` on a stream with bad
+/// rows names them (line, column, value) and goes on.
+#[test]
+fn cli_estimate_and_track_on_the_load_cell_demo() {
+    let bin = env!("CARGO_BIN_EXE_cablesense");
+    let out = std::process::Command::new(bin)
+        .args([
+            "estimate",
+            SCENE,
+            "--measure",
+            "data/measurements/tdcr_load_cells.csv",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    let records: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(records.len(), 40);
+    for r in &records {
+        assert_eq!(r["status"], "converged", "{r}");
+        for key in ["force_x@s1", "force_y@s1", "mass@s1"] {
+            assert!(r["estimate"][key].is_number() && r["std_dev"][key].is_number());
+        }
+        assert_eq!(r["tensions_n"].as_array().unwrap().len(), 6);
+        assert_eq!(r["taut"].as_array().unwrap().len(), 6);
+        assert_eq!(r["tip_position_m"].as_array().unwrap().len(), 3);
+    }
+    let rows = "t_s,s1a,s1b,s1c,s2a,s2b,s2c,tension_s1a,tension_s2b,tension_zz\n\
+                0,0,0,0,0,0,0,1.0,1.0,0\n\
+                0.1,0,0,0,0,0,0,NaN,1.0,0\n\
+                0.2,0,0,0,0,0,0,-2.5,1.0,0\n\
+                0.3,0,0,0,0,0,0,1.0,1.0,0\n";
+    let mut child = std::process::Command::new(bin)
+        .args(["track", SCENE])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(rows.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    let lines: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 5, "{lines:?}");
+    assert_eq!(
+        (lines[0]["line"].as_u64(), lines[0]["field"].as_str()),
+        (Some(1), Some("tension_zz"))
+    );
+    assert!(lines[1]["status"].is_string());
+    assert_eq!(
+        (lines[2]["line"].as_u64(), lines[2]["field"].as_str()),
+        (Some(3), Some("tension_s1a"))
+    );
+    assert!(lines[2]["error"].as_str().unwrap().contains("NaN"));
+    assert_eq!(lines[3]["line"].as_u64(), Some(4));
+    assert!(lines[3]["error"].as_str().unwrap().contains("-2.5"));
+    assert_eq!(lines[4]["line"].as_u64(), Some(5));
+    assert!(
+        lines[4]["estimate"].is_object(),
+        "the stream went on: {}",
+        lines[4]
+    );
+}
