@@ -527,3 +527,37 @@ fn cli_estimate_and_track_on_the_load_cell_demo() {
         lines[4]
     );
 }
+
+/// Passive measuring cables on the tendon robot: three cables at 30, 150 and 270
+/// degrees and 6 mm to the end of segment 2 (zero tension, lengths only) and no load
+/// cell. Their length changes alone estimate the tip force x, y back (noise-free, 1e-6
+/// N: the same convergence argument as the round trip above).
+#[test]
+fn passive_measuring_cables_estimate_the_tip_force() {
+    let mut text = std::fs::read_to_string(SCENE).unwrap();
+    for angle in [30.0, 150.0, 270.0] {
+        text.push_str(&format!(
+            "\n[[robot.cables]]\nname = \"m{angle}\"\nrouting = {{ radius_m = 0.006, angle_deg = {angle} }}\nend_section = 1\nactuation = \"passive\"\n"
+        ));
+    }
+    let sc = Scene::from_toml_str(&text).expect("scene with measuring cables");
+    let spec = EstimateSpec::new(sc.estimate.clone().unwrap().unknowns[..2].to_vec());
+    let mut truth = estimator_with(&sc, spec.clone());
+    let mut est = estimator_with(&sc, spec);
+    let theta = [0.05, -0.03];
+    let q = pull(3e-4, -2e-4);
+    let pred = truth.predict(&theta, &q).unwrap();
+    assert_eq!(pred.length_changes_m.len(), 9);
+    let status = est
+        .tick(&q, &[f64::NAN; 6], Some(&pred.length_changes_m))
+        .unwrap();
+    let e = est.estimate();
+    assert_eq!(status, EstimateStatus::Converged, "{e:?}");
+    for k in 0..2 {
+        assert!((e.estimate.values[k] - theta[k]).abs() < 1e-6, "{e:?}");
+    }
+    // only the passive cables' changes are measurements (a driven tendon's path is not)
+    let measured: Vec<bool> = e.estimate.measured_m.iter().map(Option::is_some).collect();
+    assert_eq!(measured, [vec![false; 6], vec![true; 3]].concat());
+    assert_eq!(e.estimate.redundancy, 1);
+}

@@ -283,7 +283,9 @@ impl TendonLoadEstimator {
             });
         }
         for (i, t) in tensions_n.iter().enumerate() {
-            if !t.is_nan() {
+            // (the field name is built only on failure: no allocation per row)
+            let fine = t.is_nan() || (t.is_finite() && *t >= 0.0);
+            if !fine {
                 ModelError::non_negative(format!("tension_{}", self.names[i]), *t)?;
             }
         }
