@@ -1,8 +1,8 @@
 //! Load estimation on a tendon robot from load cells
 //! (`estimate::TendonLoadEstimator`), on the shipped demo
-//! `data/scenes/tdcr_load_cells.toml` (two segments, 10 disks each, six
+//! `data/load_cells/tdcr_load_cells.toml` (two segments, 10 disks each, six
 //! displacement-driven tendons with load cells; unknown tip force x, y and payload
-//! mass) and its synthetic recording `data/measurements/tdcr_load_cells.csv`.
+//! mass) and its synthetic recording `data/load_cells/tdcr_load_cells.csv`.
 //!
 //! * `tendon_load_tick`: one row (readings + six load cells) through `tick`,
 //!   warm-started from the previous row, rows cycled in order. One iteration = one
@@ -20,10 +20,10 @@ use std::hint::black_box;
 use std::time::Duration;
 
 fn benches(c: &mut Criterion) {
-    let scene = Scene::load("data/scenes/tdcr_load_cells.toml").expect("shipped scene");
+    let scene = Scene::load("data/load_cells/tdcr_load_cells.toml").expect("shipped scene");
     let mut est = load_cells::estimator(&scene).expect("estimator");
     let mut p = load_cells::parser(&scene, &mut est);
-    let text = std::fs::read_to_string("data/measurements/tdcr_load_cells.csv").expect("data");
+    let text = std::fs::read_to_string("data/load_cells/tdcr_load_cells.csv").expect("data");
     let rows: Vec<_> = text
         .lines()
         .enumerate()

@@ -71,10 +71,10 @@ fn counted(f: impl FnOnce()) -> (usize, usize) {
 /// counted: zero allocations.
 #[test]
 fn tendon_load_tick_does_not_allocate_after_warm_up() {
-    let sc = Scene::load("data/scenes/tdcr_load_cells.toml").unwrap();
+    let sc = Scene::load("data/load_cells/tdcr_load_cells.toml").unwrap();
     let mut est = load_cells::estimator(&sc).unwrap();
     let mut p = load_cells::parser(&sc, &mut est);
-    let text = std::fs::read_to_string("data/measurements/tdcr_load_cells.csv").unwrap();
+    let text = std::fs::read_to_string("data/load_cells/tdcr_load_cells.csv").unwrap();
     let rows: Vec<_> = text
         .lines()
         .enumerate()

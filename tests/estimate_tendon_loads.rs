@@ -1,6 +1,6 @@
 //! Unknown external loads on a displacement-driven robot from load cells
 //! (`estimate::TendonLoadEstimator`, issue 9 "Estimation"), on the shipped
-//! `data/scenes/tdcr_load_cells.toml`: the two-segment textbook TDCR with a load cell
+//! `data/load_cells/tdcr_load_cells.toml`: the two-segment textbook TDCR with a load cell
 //! on each of its six tendons and an unknown tip force x, y and payload mass.
 //!
 //! Data are synthesised by the same forward model at known loads
@@ -18,7 +18,7 @@ use cablesense::estimate::{
 };
 use cablesense::{Scene, Start};
 
-const SCENE: &str = "data/scenes/tdcr_load_cells.toml";
+const SCENE: &str = "data/load_cells/tdcr_load_cells.toml";
 
 fn scene() -> Scene {
     Scene::load(SCENE).expect("shipped scene")
@@ -384,7 +384,7 @@ fn tension_unknown_on_a_driven_tendon_is_refused() {
     );
 }
 
-/// The shipped demo recording `data/measurements/tdcr_load_cells.csv` is
+/// The shipped demo recording `data/load_cells/tdcr_load_cells.csv` is
 /// `files::load_cells::synthesize` of the shipped scene with the default recipe:
 /// regenerated and compared cell by cell (1e-12 absolute + 1e-9 relative: the file
 /// is written with 7-10 significant digits, so this is a text-level match; set
@@ -393,7 +393,7 @@ fn tension_unknown_on_a_driven_tendon_is_refused() {
 fn shipped_demo_recording_is_reproduced() {
     use cablesense::files::load_cells::{synthesize, Recipe};
     let text = synthesize(&scene(), &Recipe::default()).expect("synthesizes");
-    let path = "data/measurements/tdcr_load_cells.csv";
+    let path = "data/load_cells/tdcr_load_cells.csv";
     if std::env::var("CABLESENSE_WRITE_DEMO").is_ok() {
         std::fs::write(path, &text).unwrap();
     }
@@ -422,7 +422,7 @@ fn demo_recording_is_estimated_within_its_sigma() {
     let sc = scene();
     let mut est = scene_estimator(&sc).unwrap();
     let mut p = parser(&sc, &mut est);
-    let text = std::fs::read_to_string("data/measurements/tdcr_load_cells.csv").unwrap();
+    let text = std::fs::read_to_string("data/load_cells/tdcr_load_cells.csv").unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let truth_cols: Vec<usize> = (0..header.len())
         .filter(|&i| header[i].starts_with("true_"))
@@ -462,7 +462,7 @@ fn cli_estimate_and_track_on_the_load_cell_demo() {
             "estimate",
             SCENE,
             "--measure",
-            "data/measurements/tdcr_load_cells.csv",
+            "data/load_cells/tdcr_load_cells.csv",
             "--json",
         ])
         .output()

@@ -1,7 +1,7 @@
 //! Check of the `load_cells_stream` fuzz target, shared with
 //! `tests/fuzz_regressions.rs`: arbitrary bytes as a readings file with load-cell
 //! columns (`tension_<cable>`) of the shipped load-cell demo
-//! (`data/scenes/tdcr_load_cells.toml`: six displacement-driven tendons, unknown tip
+//! (`data/load_cells/tdcr_load_cells.toml`: six displacement-driven tendons, unknown tip
 //! force x, y and payload mass), every parsed row through the load estimator (at most
 //! 3 per input, so one input stays cheap).
 //!
@@ -17,7 +17,7 @@ use cablesense::estimate::EstimateStatus;
 use cablesense::files::load_cells;
 use cablesense::Scene;
 
-const SCENE: &str = include_str!("../../data/scenes/tdcr_load_cells.toml");
+const SCENE: &str = include_str!("../../data/load_cells/tdcr_load_cells.toml");
 
 /// Run the check; panics on a broken invariant.
 pub fn check_load_cells(data: &[u8]) {

@@ -1,6 +1,6 @@
 //! A synthetic load-cell recording of a tendon robot under a known, changing tip
 //! load: the demo input of `cablesense estimate`/`track` on
-//! `data/scenes/tdcr_load_cells.toml` (`data/measurements/tdcr_load_cells.csv` is
+//! `data/load_cells/tdcr_load_cells.toml` (`data/load_cells/tdcr_load_cells.csv` is
 //! this module's output for [`Recipe::default`]; `tests/estimate_tendon_loads.rs`
 //! regenerates it and compares).
 //!
