@@ -9,6 +9,8 @@
 mod shared;
 #[path = "../fuzz/fuzz_targets/shared_estimate.rs"]
 mod shared_estimate;
+#[path = "../fuzz/fuzz_targets/shared_load_cells.rs"]
+mod shared_load_cells;
 #[path = "../fuzz/fuzz_targets/shared_readings.rs"]
 mod shared_readings;
 #[path = "../fuzz/fuzz_targets/shared_stream.rs"]
@@ -87,4 +89,9 @@ fn estimator_tick_inputs() {
 #[test]
 fn readings_stream_inputs() {
     replay("readings_stream", shared_readings::check_readings, 2);
+}
+
+#[test]
+fn load_cells_stream_inputs() {
+    replay("load_cells_stream", shared_load_cells::check_load_cells, 2);
 }

@@ -54,6 +54,27 @@ pub trait EstimationModel: CloneModel {
     fn workspace_mut(&mut self) -> Option<&mut Workspace> {
         None
     }
+    /// Measurement channels: what [`EstimationModel::cable_lengths_into`] and
+    /// [`EstimationModel::length_sensitivities`] fill. Default: one per cable, its
+    /// path length. A tendon model appends one per load cell
+    /// ([`super::TendonModel`]).
+    fn channels(&self) -> usize {
+        self.robot().cables().len()
+    }
+    /// Whether channel `j` is an absolute tendon tension (N, reference 0, default
+    /// noise [`super::EstimateSpec::load_cell_sigma_n`]) rather than a path length
+    /// (m, measured as a change from the reference lengths). Default: never.
+    fn is_tension_channel(&self, j: usize) -> bool {
+        let _ = j;
+        false
+    }
+    /// Whether channel `j`'s residual is left out at the last solve, given its
+    /// measurement and noise (a slack tendon whose load cell agrees: no residual,
+    /// [`super::TendonModel`]). Default: never.
+    fn drops_residual(&self, j: usize, measured: f64, sigma: f64) -> bool {
+        let _ = (j, measured, sigma);
+        false
+    }
 }
 
 impl EstimationModel for Workspace {
@@ -136,6 +157,15 @@ impl EstimationModel for DynModel {
     }
     fn workspace_mut(&mut self) -> Option<&mut Workspace> {
         (**self).workspace_mut()
+    }
+    fn channels(&self) -> usize {
+        (**self).channels()
+    }
+    fn is_tension_channel(&self, j: usize) -> bool {
+        (**self).is_tension_channel(j)
+    }
+    fn drops_residual(&self, j: usize, measured: f64, sigma: f64) -> bool {
+        (**self).drops_residual(j, measured, sigma)
     }
 }
 
@@ -310,7 +340,7 @@ impl<F: Differentiable + Clone + 'static> EstimationModel for RungModel<F> {
 
 /// The scene's loads with a point load at every section an unknown acts on (created
 /// when absent) and the parameter site of each unknown.
-pub(super) fn sites(spec: &EstimateSpec, loads: Loads) -> (Loads, Vec<ParamSite>) {
+pub(crate) fn sites(spec: &EstimateSpec, loads: Loads) -> (Loads, Vec<ParamSite>) {
     let mut loads = loads;
     let mut params = Vec::with_capacity(spec.unknowns.len());
     for u in &spec.unknowns {

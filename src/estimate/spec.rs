@@ -196,6 +196,12 @@ pub struct EstimateSpec {
     /// is a chi-square tail probability below 1e-6 for one redundant cable of three.
     #[serde(default = "default_poor_fit_rms_sigma")]
     pub poor_fit_rms_sigma: f64,
+    /// Default load-cell noise standard deviation (N) of a measured tendon tension
+    /// (`tension_<cable>` columns of a readings row, tendon scenes only), unless a
+    /// sample gives its own. Default 0.01 N (a few-kilogram load cell with a 24-bit
+    /// amplifier resolves about 1 g).
+    #[serde(default = "default_load_cell_sigma")]
+    pub load_cell_sigma_n: f64,
 }
 
 fn default_noise() -> f64 {
@@ -216,6 +222,9 @@ fn default_max_rms_sigma() -> f64 {
 fn default_poor_fit_rms_sigma() -> f64 {
     3.0
 }
+fn default_load_cell_sigma() -> f64 {
+    1e-2
+}
 fn default_true() -> bool {
     true
 }
@@ -235,6 +244,7 @@ impl EstimateSpec {
             reuse_jacobian: true,
             max_rms_sigma: default_max_rms_sigma(),
             poor_fit_rms_sigma: default_poor_fit_rms_sigma(),
+            load_cell_sigma_n: default_load_cell_sigma(),
         }
     }
 
@@ -249,6 +259,7 @@ impl EstimateSpec {
         ModelError::positive("estimate.noise_m", self.noise_m)?;
         ModelError::positive("estimate.max_rms_sigma", self.max_rms_sigma)?;
         ModelError::positive("estimate.poor_fit_rms_sigma", self.poor_fit_rms_sigma)?;
+        ModelError::positive("estimate.load_cell_sigma_n", self.load_cell_sigma_n)?;
         if self.max_iterations == 0 || self.max_iterations > 10_000 {
             return Err(ModelError::OutOfRange {
                 field: "estimate.max_iterations".into(),

@@ -5,7 +5,11 @@
 //! - one per displacement-driven tendon, named by the cable's `reading` (default: its
 //!   name), in the unit `[readings] scale_m` says (metres per unit; `0.001` for mm);
 //! - optional time `[readings] time_column` (default `t_s`);
-//! - optional `tension_<cable>` (N): a load cell on that tendon;
+//! - optional `tension_<cable>` (N, >= 0): a load cell on that displacement-driven
+//!   tendon (the load-cell measurements of `estimate::TendonLoadEstimator`); a
+//!   `tension_` column naming no displacement-driven tendon is an error naming the
+//!   line and column (CSV: reported on the header line, the column is then ignored
+//!   and the stream goes on; JSON lines: an error for that row);
 //! - optional measured tip `[readings] measured_tip` (three columns, unit
 //!   `measured_scale_m`), carried along for comparison;
 //! - anything else (a pattern label, other sensors) is ignored.
@@ -135,6 +139,28 @@ impl ReadingsParser {
         }
     }
 
+    /// The first column named `tension_<x>` with no driven tendon `x`.
+    fn unknown_tension_column<'a>(
+        &self,
+        mut names: impl Iterator<Item = &'a str>,
+    ) -> Option<String> {
+        names
+            .find(|n| n.starts_with("tension_") && self.classify(n) == Col::Ignored)
+            .map(str::to_string)
+    }
+
+    fn unknown_tension(&self, line: usize, name: &str) -> LineError {
+        Self::err(
+            line,
+            name,
+            format!(
+                "no displacement-driven tendon named `{}` for a load cell (tendons: {}); the column is ignored",
+                name.trim_start_matches("tension_"),
+                self.cables.join(", ")
+            ),
+        )
+    }
+
     /// Parse one line: `Ok(None)` for blank lines, comments and headers.
     pub fn line(&mut self, line_no: usize, text: &str) -> Result<Option<ReadingRow>, LineError> {
         let t = text.trim_start_matches('\u{feff}').trim();
@@ -163,7 +189,11 @@ impl ReadingsParser {
                 ));
             }
             self.names = cells.iter().map(|c| c.to_string()).collect();
+            let unknown = self.unknown_tension_column(cells.iter().copied());
             let restart = self.header.replace(cols).is_some();
+            if let Some(name) = unknown {
+                return Err(self.unknown_tension(line_no, &name));
+            }
             if restart {
                 // a header mid-stream (two recordings joined, a logger restarted):
                 // its columns are used from here on, and the line is reported, so no
@@ -199,6 +229,9 @@ impl ReadingsParser {
         let obj = v
             .as_object()
             .ok_or_else(|| Self::err(line, "json", "a row must be an object"))?;
+        if let Some(name) = self.unknown_tension_column(obj.keys().map(String::as_str)) {
+            return Err(self.unknown_tension(line, &name));
+        }
         let items: Vec<(Col, String, Option<String>)> = obj
             .iter()
             .map(|(k, v)| {
@@ -322,5 +355,43 @@ mod tests {
             .unwrap();
         assert_eq!(r.tensions_n[0], 3.0);
         assert!(r.tensions_n[1].is_nan());
+        // load-cell errors name line, column and value; the stream goes on
+        let e = p
+            .line(3, r#"{"a_mm": 1, "b_mm": 2, "tension_zz": 3}"#)
+            .unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (3, "tension_zz"));
+        assert!(e.why.contains("`zz`") && e.why.contains("a, b"), "{e}");
+        let e = p
+            .line(4, r#"{"a_mm": 1, "b_mm": 2, "tension_b": -0.5}"#)
+            .unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (4, "tension_b"));
+        assert!(e.why.contains("-0.5"), "{e}");
+        let e = p
+            .line(5, r#"{"a_mm": 1, "b_mm": 2, "tension_a": "NaN"}"#)
+            .unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (5, "tension_a"));
+        assert!(p
+            .line(6, r#"{"a_mm": 1, "tension_b": 0.5}"#)
+            .unwrap()
+            .is_some());
+    }
+
+    #[test]
+    fn csv_load_cell_columns() {
+        let mut p = parser();
+        // an unknown load cell is reported on the header, which is still used
+        let e = p.line(1, "a_mm,b_mm,tension_a,tension_c").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (1, "tension_c"));
+        let r = p.line(2, "1,2,0.75,9").unwrap().unwrap();
+        assert_eq!(r.tensions_n[0], 0.75);
+        assert!(r.tensions_n[1].is_nan());
+        let e = p.line(3, "1,2,-1,0").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (3, "tension_a"));
+        assert!(e.why.contains("-1"), "{e}");
+        let e = p.line(4, "1,2,inf,0").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (4, "tension_a"));
+        // empty load cell: no measurement on that row
+        let r = p.line(5, "1,2,,0").unwrap().unwrap();
+        assert!(r.tensions_n[0].is_nan());
     }
 }

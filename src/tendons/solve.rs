@@ -38,6 +38,8 @@ use serde::{Deserialize, Serialize};
 
 // The warm fast path: Newton on the shooting unknowns and tensions together.
 mod joint;
+// Sensitivities with respect to extra load parameters (load estimation).
+mod loads;
 
 /// Settings of the tendon iteration (the shooting solve inside has its own).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -14,7 +14,9 @@ pub struct Args {
     /// Scene with an [estimate] table (a path or `demo:NAME`).
     #[arg(default_value = cablesense::files::demo::TRACK_SCENE)]
     scene: PathBuf,
-    /// Encoder samples: CSV with a header, or JSON lines (a path or `demo:NAME`).
+    /// Encoder samples: CSV with a header, or JSON lines (a path or `demo:NAME`); on a
+    /// scene with displacement-driven tendons, rows of servo readings with
+    /// `tension_<tendon>` load-cell columns.
     #[arg(long, default_value = cablesense::files::demo::TRACK_INPUT)]
     measure: PathBuf,
     /// One JSON object per sample instead of a table.
@@ -27,6 +29,27 @@ pub struct Args {
 /// Run `estimate`. Exit code 1 if any line was bad, any sample did not converge or
 /// was a poor fit (residual beyond `poor_fit_rms_sigma` noise sigmas).
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let scene = cablesense::files::demo::DataRef::parse(&a.scene)?.scene()?;
+    if crate::readings::is_tendon_scene(&scene) {
+        // servo readings and load cells in, unknown loads per row out
+        anyhow::ensure!(
+            a.model == "scene",
+            "--model {}: a scene with displacement-driven tendons is estimated on its own rod model (--model scene)",
+            a.model
+        );
+        let output = if a.json {
+            crate::tendon_estimate::Output::Json
+        } else {
+            crate::tendon_estimate::Output::Text
+        };
+        let (_, poor, bad) =
+            crate::tendon_estimate::stream(&scene, &a.scene, open_input(&a.measure)?, output)?;
+        return Ok(if poor + bad == 0 {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::from(1)
+        });
+    }
     let (scene, mut est) = estimator(&a.scene, &a.model)?;
     let mut p = parser(&scene, &est);
     let file = open_input(&a.measure)?;

@@ -12,6 +12,7 @@ mod readings;
 mod solve;
 mod stability;
 mod stream;
+mod tendon_estimate;
 mod track;
 mod validate;
 

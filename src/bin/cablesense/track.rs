@@ -13,7 +13,8 @@ use std::process::ExitCode;
 pub struct Args {
     /// Scene with an [estimate] table, or a scene with displacement-driven tendons
     /// and no [estimate] table (rows of servo readings -> shape per row, warm-started
-    /// from the previous row). Default: the shipped demo, which also defaults the
+    /// from the previous row), or one with both (servo readings and `tension_<tendon>`
+    /// load cells -> unknown loads, tensions and shape per row). Default: the shipped demo, which also defaults the
     /// input to its recorded stream.
     scene: Option<PathBuf>,
     /// Read rows from this file (or `demo:NAME`) instead of standard input.
@@ -50,6 +51,25 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             reader,
             crate::readings::Output::Json,
             None,
+        )?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    if crate::readings::is_tendon_scene(&scene) {
+        // servo readings and load cells in, unknown loads per row out
+        anyhow::ensure!(
+            a.model == "scene",
+            "--model {}: a scene with displacement-driven tendons is estimated on its own rod model (--model scene)",
+            a.model
+        );
+        let reader: Box<dyn BufRead> = match &input {
+            Some(f) => open_input(f)?,
+            None => Box::new(std::io::BufReader::new(std::io::stdin())),
+        };
+        crate::tendon_estimate::stream(
+            &scene,
+            &scene_path,
+            reader,
+            crate::tendon_estimate::Output::Json,
         )?;
         return Ok(ExitCode::SUCCESS);
     }

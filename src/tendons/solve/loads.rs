@@ -1,0 +1,108 @@
+//! Exact sensitivities of a solve from readings with respect to the extra load
+//! parameters `phi` (tip force components, payload mass, ...: the sites given to
+//! [`TendonWorkspace::with_params`]), for estimating unknown loads
+//! (`crate::estimate::TendonLoadEstimator`).
+//!
+//! At a converged solve every driven tendon satisfies the NCP of the parent module,
+//! `G_i(T, phi) = 0`. With the active set held (strict complementarity: each tendon
+//! clearly taut or clearly slack), implicit differentiation gives, per taut tendon,
+//!
+//! ```text
+//! c_i dT_i - sum_k (dl_i/dT_k) dT_k - (dl_i/dphi) dphi = 0
+//! ```
+//!
+//! (from `c_i T_i + L_f,i - l_i(T, phi) = 0`, the readings and so `L_f` fixed), and
+//! `dT_i = 0` per slack tendon. So `J dT/dphi = B` with `J` the generalized Jacobian
+//! of the semi-smooth Newton step (taut row `c_i e_i - dl_i/dT`, slack row
+//! `(c_i + a_i) e_i`) and `B` the rows `dl_i/dphi` (taut) or 0 (slack). The path
+//! lengths of every cable then change by `dl/dphi = dl/dphi|_T + dl/dT dT/dphi`. The
+//! partials `dl/d[T; phi]` at fixed `(T, phi)` are the shooting workspace's exact
+//! ones ([`crate::Workspace::length_sensitivities`], implicit differentiation of the
+//! shooting problem). With friction the capstan factors are frozen at their last
+//! values, as in the forward solve's Jacobian: the result is then not exact (their
+//! dependence on the shape is second order in `mu`, parent module docs).
+
+use super::TendonWorkspace;
+use crate::error::ModelError;
+
+impl TendonWorkspace {
+    /// Number of extra load parameters (after the tensions).
+    pub fn extra_count(&self) -> usize {
+        self.n_extra
+    }
+
+    /// The readings (m) that mean `q = 0` for every driven tendon (each tendon's
+    /// encoder zero offset): the reference state that fixed `L0`.
+    pub fn zero_readings(&self) -> Vec<f64> {
+        self.mech.iter().map(|m| m.zero_offset_m).collect()
+    }
+
+    /// Check a row of readings without solving: one per driven tendon, finite,
+    /// leaving a positive free length (the errors of
+    /// [`TendonWorkspace::solve_readings`]).
+    pub fn validate_readings(&self, readings_m: &[f64]) -> Result<(), ModelError> {
+        self.check_readings(readings_m)
+    }
+
+    /// At the last converged solve: the total sensitivities of every cable's path
+    /// length, `dl/dphi` (`dl`, row-major `cables x extra`, m per unit of each
+    /// parameter), and of the driven tendons' tensions, `dT/dphi` (`dt`, row-major
+    /// `driven x extra`, N per unit), with respect to the extra load parameters
+    /// (module docs). One dual sweep of the shooting problem and one LU of the
+    /// `driven x driven` generalized Jacobian; no allocation. `false` when the sweep
+    /// fails or the Jacobian is singular.
+    pub fn load_sensitivities(&mut self, dl: &mut [f64], dt: &mut [f64]) -> bool {
+        let p = self.driven.len();
+        let e = self.n_extra;
+        let np = self.theta.len();
+        let nc = self.lengths.len();
+        if !self
+            .ws
+            .length_sensitivities(&mut self.sens, &mut self.lengths)
+        {
+            return false;
+        }
+        self.sens_fresh = true;
+        // the generalized Jacobian of the Newton step at this point (same rows)
+        let a = self.lu.matrix_mut();
+        for i in 0..p {
+            let j = self.driven[i];
+            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
+            for k in 0..p {
+                a[i * p + k] = if self.taut[i] {
+                    -self.sens[j * np + k] + if i == k { c } else { 0.0 }
+                } else if i == k {
+                    c + self.geo[i]
+                } else {
+                    0.0
+                };
+            }
+        }
+        if self.lu.factor().is_none() {
+            return false;
+        }
+        for k in 0..e {
+            // right-hand side B e_k into the step scratch, then dT/dphi_k
+            for i in 0..p {
+                let j = self.driven[i];
+                self.step[i] = if self.taut[i] {
+                    self.sens[j * np + p + k]
+                } else {
+                    0.0
+                };
+            }
+            self.lu.solve_in_place(&mut self.step);
+            for i in 0..p {
+                dt[i * e + k] = if self.taut[i] { self.step[i] } else { 0.0 };
+            }
+            for jc in 0..nc {
+                let mut v = self.sens[jc * np + p + k];
+                for i in 0..p {
+                    v += self.sens[jc * np + i] * dt[i * e + k];
+                }
+                dl[jc * e + k] = v;
+            }
+        }
+        dl.iter().chain(dt.iter()).all(|v| v.is_finite())
+    }
+}
