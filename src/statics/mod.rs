@@ -8,6 +8,7 @@
 
 mod floor;
 mod intensity;
+mod multiple;
 mod pass;
 mod plan;
 mod workspace;
