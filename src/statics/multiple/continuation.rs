@@ -70,12 +70,12 @@ impl Multi {
             }
             let (st, it) = self.newton(a.plan, full, a.tol, a.max_iterations);
             (status, iterations) = (st, it);
-            let flipped =
-                it > 0 && self.lu_valid && sign_ok.is_finite() && self.lu.det_sign() != sign_ok;
-            if flipped {
+            // the sign of det J at a fresh factorisation of this solve
+            let fresh = self.fresh > 0 && self.lu_valid;
+            if fresh && sign_ok.is_finite() && self.lu.det_sign() != sign_ok {
                 status = SolveStatus::Stalled;
             }
-            if status.is_converged() && it > 0 && self.lu_valid {
+            if status.is_converged() && fresh {
                 self.sign = self.lu.det_sign();
             }
         }
@@ -138,9 +138,10 @@ impl Multi {
             if st.is_converged() {
                 let pred = step * max_abs(&self.tan);
                 ratio = max_abs(&self.moved) / (pred + 1e-9);
-                // the tangent at the new point from the last factorisation (a fresh
-                // one when Newton took no step)
-                match self.tangent(a.plan, at(target), it == 0 || !self.lu_valid) {
+                // the tangent at the new point from the last factorisation if Newton
+                // made one at this step (else a fresh one: the sign of det J must be
+                // this point's)
+                match self.tangent(a.plan, at(target), self.fresh == 0 || !self.lu_valid) {
                     Ok(s) => sign = s,
                     Err(_) => ratio = f64::INFINITY,
                 }

@@ -96,6 +96,8 @@ pub(crate) struct Multi {
     moved: Vec<f64>,
     lu: BandedLu,
     lu_valid: bool,
+    /// Fresh Jacobians of the last Newton run.
+    fresh: usize,
     /// Sign of `det J` at the last converged point (NaN: unknown, e.g. after a re-mesh).
     sign: f64,
     /// Recording of the last solve's node states (samples, poses, holes).
@@ -121,6 +123,7 @@ impl Multi {
             moved: Vec::new(),
             lu: BandedLu::new(0, KL, KU),
             lu_valid: false,
+            fresh: 0,
             sign: f64::NAN,
             last: intervals::Rec::default(),
             has_solution: false,

@@ -7,6 +7,11 @@ use crate::integrate::State;
 use crate::math::{exp_so3, Dual, Real};
 use crate::statics::plan::Plan;
 use crate::statics::SolveStatus;
+
+/// A reused (chord) factorisation's full step must shrink `||r||_2` by this factor.
+const CHORD_CONTRACTION: f64 = 0.1;
+/// Chord steps per factorisation before it is refreshed anyway.
+const MAX_CHORD_STEPS: usize = 8;
 use nalgebra::{Matrix3, Vector3};
 
 /// `vee((E - E^T)/2)`: the rotation mismatch of `E = R_next^T R_end` (zero when the
@@ -165,7 +170,10 @@ impl Multi {
     }
 
     /// Newton at the current node states until `max_abs(res) <= tol`, at most
-    /// `max_jacobians` Jacobians. Adds the accepted steps to `moved`.
+    /// `max_jacobians` fresh Jacobians. A factorisation left from an earlier point
+    /// (the chord method) is reused while its full step shrinks `||r||_2` by
+    /// [`CHORD_CONTRACTION`]; a fresh exact Jacobian's step gets a backtracking line
+    /// search. Adds the accepted steps to `moved`; counts fresh Jacobians in `fresh`.
     pub(super) fn newton(
         &mut self,
         plan: &Plan,
@@ -173,32 +181,51 @@ impl Multi {
         tol: f64,
         max_jacobians: usize,
     ) -> (SolveStatus, usize) {
+        self.fresh = 0;
         if !self.eval(plan, ld, false) {
             return (SolveStatus::NonFinite, 0);
         }
         let n = self.n_unknowns();
         let mut it = 0;
+        let mut chord_steps = 0;
         loop {
             if max_abs(&self.res) <= tol {
                 return (SolveStatus::Converged, it);
             }
-            if it >= max_jacobians {
+            if chord_steps >= MAX_CHORD_STEPS {
+                self.lu_valid = false;
+            }
+            let fresh = !self.lu_valid;
+            if fresh && self.fresh >= max_jacobians {
                 return (SolveStatus::MaxIterations, it);
             }
             it += 1;
-            if !self.jacobian(plan, ld) {
-                return (SolveStatus::NonFinite, it);
-            }
-            self.lu_valid = false;
-            match self.lu.factor() {
-                Some(rc) if rc > 1e-14 => self.lu_valid = true,
-                _ => return (SolveStatus::IllConditioned, it),
+            if fresh {
+                self.fresh += 1;
+                chord_steps = 0;
+                if !self.jacobian(plan, ld) {
+                    return (SolveStatus::NonFinite, it);
+                }
+                match self.lu.factor() {
+                    Some(rc) if rc > 1e-14 => self.lu_valid = true,
+                    _ => return (SolveStatus::IllConditioned, it),
+                }
             }
             for i in 0..n {
                 self.dx[i] = -self.res[i];
             }
             self.lu.solve_in_place(&mut self.dx);
             let f0 = norm2(&self.res);
+            if !fresh {
+                chord_steps += 1;
+                self.step_into(plan, 1.0, true);
+                if self.eval(plan, ld, true) && norm2(&self.res_trial) < CHORD_CONTRACTION * f0 {
+                    self.accept(1.0);
+                } else {
+                    self.lu_valid = false;
+                }
+                continue;
+            }
             let mut alpha = 1.0;
             let mut accepted = false;
             for _ in 0..30 {
@@ -211,13 +238,23 @@ impl Multi {
             }
             if !accepted {
                 self.eval(plan, ld, false);
+                self.lu_valid = false;
                 return (SolveStatus::Stalled, it);
             }
-            std::mem::swap(&mut self.nodes, &mut self.trial);
-            std::mem::swap(&mut self.res, &mut self.res_trial);
-            for i in 0..n {
-                self.moved[i] += alpha * self.dx[i];
+            self.accept(alpha);
+            if alpha < 1.0 {
+                // far from the solution: do not reuse this Jacobian
+                self.lu_valid = false;
             }
+        }
+    }
+
+    /// Take the trial point (reached by `alpha dx`) as the current one.
+    fn accept(&mut self, alpha: f64) {
+        std::mem::swap(&mut self.nodes, &mut self.trial);
+        std::mem::swap(&mut self.res, &mut self.res_trial);
+        for (m, d) in self.moved.iter_mut().zip(&self.dx) {
+            *m += alpha * d;
         }
     }
 }

@@ -3,15 +3,20 @@
 //!
 //! Multiple shooting answers a solve when the loads are ones it handles (no tensioned
 //! cable) with intensity at most [`MULTI_MAX_INTENSITY`], and
-//! - a cold solve (with `continuation`) has intensity above [`MULTI_INTENSITY`];
-//! - a warm solve follows a multiple-shooting solution;
+//! - a cold solve (with `continuation`; or a warm one with no solution to start from)
+//!   has intensity above [`MULTI_INTENSITY`];
+//! - a warm solve above [`MULTI_INTENSITY`] follows a multiple-shooting solution
+//!   (at or below it, single shooting takes over again from that solution's base
+//!   wrench: faster, and well-conditioned there);
 //! - single shooting's cold or warm solve ended without converging (or `unstable`),
 //!   with `continuation`, at an intensity above [`MULTI_FALLBACK`].
 //!
+//! So a control loop's warm solves stay on single shooting as long as it converges.
 //! Everything the workspace hands out afterwards (tip, base wrench, cable lengths,
-//! the [`Solution`]) comes from the multiple-shooting node states until a solve goes
-//! back to single shooting. Sensitivities and the estimator's linearisation stay on
-//! single shooting (they run at the moderate loads of a control loop).
+//! the [`Solution`], Jacobi's test) comes from the multiple-shooting node states until
+//! a solve goes back to single shooting. Sensitivities and the estimator's
+//! linearisation stay on single shooting (they run at the moderate loads of a control
+//! loop).
 
 use super::*;
 use crate::statics::multiple::{MultiArgs, MULTI_INTENSITY, MULTI_MAX_INTENSITY};
@@ -32,9 +37,11 @@ impl Workspace {
             self.multi_active = false;
             return None;
         }
+        let large = intensity > MULTI_INTENSITY;
         let warm = start == Start::Warm && self.multi_active && self.multi.has_solution();
-        let cold = !warm && self.settings.continuation && intensity > MULTI_INTENSITY;
-        if !(warm || cold) {
+        let warm_single = start == Start::Warm && !self.multi_active && self.has_solution;
+        let cold = !warm && !warm_single && self.settings.continuation && large;
+        if !((warm && large) || cold) {
             self.multi_active = false;
             return None;
         }
