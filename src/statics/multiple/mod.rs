@@ -45,8 +45,8 @@
 //! the nodes with re-orthonormalised directions (`conjugate_point`).
 //!
 //! Not handled here: tensioned cables (their chords couple the disks on both sides of
-//! a node) and load parameters of cable tension; the workspace keeps single shooting
-//! for them.
+//! a node) and workspaces with load parameters (the estimator's: its sensitivities
+//! are single shooting's); the workspace keeps single shooting for them.
 
 mod continuation;
 mod intervals;
@@ -142,9 +142,11 @@ impl Multi {
         }
     }
 
-    /// Whether multiple shooting handles the plan's loads: no tensioned cable.
+    /// Whether multiple shooting handles the plan: no tensioned cable, and no load
+    /// parameters (a workspace with parameters serves the estimator, whose
+    /// sensitivities and linearisation are single shooting's).
     pub fn supports(plan: &Plan) -> bool {
-        !plan.cables.iter().any(|c| c.tensioned)
+        !plan.cables.iter().any(|c| c.tensioned) && plan.params.is_empty()
     }
 
     /// The last solve converged here (a warm start exists).
