@@ -162,7 +162,14 @@ fn rod_shooting_converges_to_the_physical_branch_inside_the_documented_region() 
                     .unwrap();
                 assert!(rep.status.is_converged(), "{model:?} {dir:?} {g}: {rep:?}");
                 let d = (m.tip_position() - tip).norm();
-                assert!(d < 1e-6, "{model:?} {dir:?} {g}: off the branch by {d:e} m");
+                // from intensity 20 (magnitude 20 plus the rod's weight) the cold solve
+                // is multiple shooting, whose RK4 steps are at most a tenth of the
+                // boundary layer; the tracker's RK4 32 differs from it by its own
+                // discretisation error (seen 5.3e-6 m at follower 20, 2.0e-5 m at 30),
+                // growing like (h sqrt(P/EI))^4; another
+                // equilibrium lies tenths of L away
+                let tol = if *g >= 20.0 { 1e-4 } else { 1e-6 };
+                assert!(d < tol, "{model:?} {dir:?} {g}: off the branch by {d:e} m");
             }
         }
         // warm from the previous grid point, no continuation: up to 10 in steps <= 2.5

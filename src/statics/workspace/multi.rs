@@ -85,14 +85,15 @@ impl Workspace {
         let rep = self.multi.solve(&args, warm);
         self.multi_active = true;
         // the base wrench as single shooting's unknowns (a warm start if a later
-        // solve goes back to it)
+        // solve goes back to it); a failed solve leaves single shooting's state alone
         let (n0, m0) = self.multi.base_wrench();
         let p = &self.plan;
-        if p.closed_form {
+        let converged = rep.status.is_converged();
+        if converged && p.closed_form {
             for i in 0..3 {
                 self.x[i] = m0[i] / p.moment_scale;
             }
-        } else if self.x.len() >= 6 {
+        } else if converged && self.x.len() >= 6 {
             for i in 0..3 {
                 self.x[i] = n0[i] / p.force_scale;
                 self.x[3 + i] = m0[i] / p.moment_scale;
