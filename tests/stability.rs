@@ -162,7 +162,14 @@ fn rod_shooting_converges_to_the_physical_branch_inside_the_documented_region() 
                     .unwrap();
                 assert!(rep.status.is_converged(), "{model:?} {dir:?} {g}: {rep:?}");
                 let d = (m.tip_position() - tip).norm();
-                assert!(d < 1e-6, "{model:?} {dir:?} {g}: off the branch by {d:e} m");
+                // from intensity 20 (magnitude 20 plus the rod's weight) the cold solve
+                // is multiple shooting, whose RK4 steps are at most a tenth of the
+                // boundary layer; the tracker's RK4 32 differs from it by its own
+                // discretisation error (seen 5.3e-6 m at follower 20, 2.0e-5 m at 30),
+                // growing like (h sqrt(P/EI))^4; another
+                // equilibrium lies tenths of L away
+                let tol = if *g >= 20.0 { 1e-4 } else { 1e-6 };
+                assert!(d < tol, "{model:?} {dir:?} {g}: off the branch by {d:e} m");
             }
         }
         // warm from the previous grid point, no continuation: up to 10 in steps <= 2.5
@@ -176,6 +183,61 @@ fn rod_shooting_converges_to_the_physical_branch_inside_the_documented_region() 
                 .unwrap();
             assert!(rep.status.is_converged(), "warm {model:?} {g}: {rep:?}");
             assert!((m.tip_position() - tip).norm() < 1e-6, "warm {g}");
+        }
+    }
+}
+
+/// Past 50 (README "Where methods fail": the default cold solve to 1000 down, up and
+/// lateral, by multiple shooting above load intensity 20): converged, stable by
+/// Jacobi's test, and within 1e-6 m of the branch tracked from rest. The tracker
+/// follows the branch with single shooting to 40, hands over to multiple shooting by a
+/// cold solve there (accepted only within 1e-4 L of the tracked tip: the two
+/// discretisations differ there, RK4 32 per section against steps of a tenth of the
+/// boundary layer, while another equilibrium lies tenths of L away), then steps warm
+/// by 2 % of the load.
+#[test]
+fn default_cold_solve_reaches_a_thousand_on_the_branch() {
+    let sc = scene();
+    let robot = sc.build_robot().unwrap();
+    let grid = [100.0, 200.0, 500.0, 1000.0];
+    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
+        for dir in [Dir::Down, Dir::Up, Dir::Lateral] {
+            let (tip40, _) = track(&tracker(model), &robot, &sc.loads, dir, &[40.0])[0].clone();
+            let handover = match tracker(model) {
+                Rung::Rod(s) => Rung::Rod(SolverSettings {
+                    continuation: true,
+                    ..s
+                }),
+                _ => unreachable!(),
+            };
+            let mut t = handover.build(&robot).unwrap();
+            let rep = t
+                .solve(&loads_at(&robot, &sc.loads, dir, 40.0), Start::Cold)
+                .unwrap();
+            assert!(rep.status.is_converged(), "{model:?} {dir:?} hand-over");
+            let d = (t.tip_position() - tip40).norm();
+            eprintln!("{model:?} {dir:?}: hand-over {d:e} m");
+            assert!(
+                d < 1e-4 * robot.length(),
+                "{model:?} {dir:?}: hand-over {d:e} m off the track"
+            );
+            let mut a: f64 = 40.0;
+            let mut m = rod(model, 32, true).build(&robot).unwrap();
+            for g in grid {
+                while a < g {
+                    a = (a * 1.02).min(g);
+                    let rep = t
+                        .solve(&loads_at(&robot, &sc.loads, dir, a), Start::Warm)
+                        .unwrap();
+                    assert!(rep.status.is_converged(), "{model:?} {dir:?} tracking {a}");
+                }
+                let rep = m
+                    .solve(&loads_at(&robot, &sc.loads, dir, g), Start::Cold)
+                    .unwrap();
+                assert!(rep.status.is_converged(), "{model:?} {dir:?} {g}: {rep:?}");
+                let d = (m.tip_position() - t.tip_position()).norm();
+                assert!(d < 1e-6, "{model:?} {dir:?} {g}: off the branch by {d:e} m");
+            }
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Where each method stops converging (`cablesense stability`).
 //!
 //! Forward map: the scene's loads plus a tip force of non-dimensional magnitude
-//! `P L^2 / EI` in 0..50 along several directions (down along gravity, up, lateral,
+//! `P L^2 / EI` in 0..1000 along several directions (down along gravity, up, lateral,
 //! axial compression, follower), and cable 0's tension `T r L / EI` in 0..8.5 (the rod
 //! doubles back past ~pi), for every setting of [`forward_settings`] and start:
 //! * `cold`: Newton from the straight rod, no continuation;

@@ -5,6 +5,10 @@
 //! and more than 1 % of `L` (another equilibrium: warm starts with coarser steps do this
 //! near `P L^2/EI` = 41 on the track demo), ends the branch: every later grid point has
 //! no reference.
+//!
+//! The forward reference ([`reference`]) continues past the end of its single-shooting
+//! track (warm single shooting fails where the base-to-tip map becomes ill-conditioned,
+//! `P L^2/EI` ~ 50-100) with multiple shooting ([`extend_reach`]).
 
 use super::sweep::{loads_at, Direction};
 use super::ExperimentError;
@@ -91,15 +95,72 @@ pub fn tracking_settings() -> SolverSettings {
     s
 }
 
-/// Reference tips along a load direction (full Cosserat, adaptive 1e-12, [`track`]).
+/// Reference tips along a load direction (full Cosserat, adaptive 1e-12, [`track`],
+/// then [`extend_reach`]).
 pub fn reference(
     robot: &Robot,
     base: &Loads,
     dir: Direction,
 ) -> Result<Vec<Option<Vector3<f64>>>, ExperimentError> {
     let mut m = Rung::Rod(tracking_settings()).build(robot)?;
-    Ok(track(m.as_mut(), robot, base, dir)?
+    let mut out: Vec<Option<Vector3<f64>>> = track(m.as_mut(), robot, base, dir)?
         .into_iter()
         .map(|p| p.map(|(t, _)| t))
-        .collect())
+        .collect();
+    extend_reach(robot, base, dir, &mut out)?;
+    Ok(out)
+}
+
+/// Smallest magnitude where the tracked branch may hand over to multiple shooting
+/// (below it, a track that ends has met a fold, not ill-conditioning).
+const REACH_FROM: f64 = 20.0;
+
+/// Past the last grid point the single-shooting track reached (at least
+/// [`REACH_FROM`]), continue the reference with the same settings plus load
+/// continuation, i.e. multiple shooting above load intensity 20
+/// (`statics::multiple`): a cold solve at that last point is accepted as the hand-over
+/// only if its tip is within 1e-6 L of the tracked one (the same branch, reached by
+/// another path), then warm steps of 2 % of the magnitude (at least the direction's
+/// reference step) with the jump guard of [`track_with`].
+pub fn extend_reach(
+    robot: &Robot,
+    base: &Loads,
+    dir: Direction,
+    out: &mut [Option<Vector3<f64>>],
+) -> Result<(), ExperimentError> {
+    let grid = dir.grid();
+    let l = robot.length();
+    let Some(last) = out.iter().rposition(Option::is_some) else {
+        return Ok(());
+    };
+    if last + 1 >= grid.len() || grid[last] < REACH_FROM {
+        return Ok(());
+    }
+    let mut s = tracking_settings();
+    s.continuation = true;
+    let mut m = Rung::Rod(s).build(robot)?;
+    let rep = m.solve(&loads_at(robot, base, dir, grid[last]), Start::Cold)?;
+    let mut tip = m.tip_position();
+    let handed = out[last].is_some_and(|t| (t - tip).norm() <= 1e-6 * l);
+    if !rep.status.is_converged() || !handed {
+        return Ok(());
+    }
+    let (mut a, mut moved) = (grid[last], 0.0f64);
+    for (i, &g) in grid.iter().enumerate().skip(last + 1) {
+        let mut ok = true;
+        while ok && a < g - 1e-12 {
+            a = (a + (0.02 * a).max(dir.reference_step())).min(g);
+            let rep = m.solve(&loads_at(robot, base, dir, a), Start::Warm)?;
+            let t = m.tip_position();
+            let d = (t - tip).norm();
+            ok = rep.status.is_converged() && (moved == 0.0 || d < (5.0 * moved).max(0.01 * l));
+            moved = d;
+            tip = t;
+        }
+        if !ok {
+            break;
+        }
+        out[i] = Some(tip);
+    }
+    Ok(())
 }

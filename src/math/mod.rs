@@ -3,11 +3,13 @@
 //!
 //! Nothing here knows about rods or robots.
 
+mod banded;
 mod dual;
 mod kernels;
 mod lu;
 mod so3;
 
+pub use banded::BandedLu;
 pub use dual::Dual;
 pub use kernels::{cross, gram, mat_mul, mat_skew, mat_t_vec, mat_vec, mat_vec_f64};
 pub use lu::DenseLu;

@@ -9,6 +9,7 @@
 mod continuous;
 mod floor;
 mod intensity;
+mod multiple;
 mod pass;
 mod plan;
 mod workspace;

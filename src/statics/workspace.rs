@@ -3,6 +3,7 @@
 
 use super::floor::residual_floor;
 use super::intensity::load_intensity;
+use super::multiple::Multi;
 use super::pass::{pass, PassBuf, Recording, LOCAL_TOL};
 use super::plan::{ParamSite, Plan};
 use super::{GuidePose, Solution, SolveReport, SolveStatus};
@@ -59,6 +60,7 @@ mod sweep;
 use sweep::{sweep, Wide};
 
 mod continuation;
+mod multi;
 mod newton;
 mod output;
 mod sens;
@@ -134,6 +136,10 @@ pub struct Workspace {
     tip: Vector3<f64>,
     report: SolveReport,
     jac_evals: u64,
+    /// Multiple shooting for large loads (`multi.rs`); `multi_active` when it holds
+    /// the current solution.
+    multi: Multi,
+    multi_active: bool,
 }
 
 impl Workspace {
@@ -203,6 +209,8 @@ impl Workspace {
                 unknowns: n,
             },
             jac_evals: 0,
+            multi: Multi::new(),
+            multi_active: false,
         })
     }
 
@@ -322,6 +330,9 @@ impl Workspace {
         let intensity = self.load_intensity();
         self.tol = self.settings.tolerance.max(self.residual_floor());
         self.branch_verdict = false;
+        if let Some(rep) = self.multi_first(start, intensity) {
+            return rep;
+        }
         if warm
             && self.settings.branch_guard
             && !self.guarded()
@@ -371,6 +382,9 @@ impl Workspace {
         } else {
             self.status_here(status)
         };
+        if let Some(rep) = self.multi_fallback(status, intensity) {
+            return rep;
+        }
         self.has_solution = status.is_converged();
         self.last_intensity = intensity;
         self.report = SolveReport {

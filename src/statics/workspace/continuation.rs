@@ -277,6 +277,9 @@ impl Workspace {
     /// hole unknowns are held fixed in that sweep, so the test is not defined there:
     /// `None`.
     pub fn conjugate_point(&mut self) -> Option<f64> {
+        if self.multi_active {
+            return self.multi.conjugate_point(&self.plan, &self.b64.theta);
+        }
         let n = self.plan.n_unknowns;
         let (plan, x) = (&self.plan, &self.x);
         let mut scratch_s = [0.0; 36];

@@ -38,6 +38,9 @@ impl Workspace {
     /// Cable lengths of the last evaluated point (m), indexed like `robot.cables`.
     /// No allocation.
     pub fn cable_lengths_into(&self, out: &mut [f64]) {
+        if self.multi_active {
+            return self.multi.cable_lengths_into(&self.plan, out);
+        }
         for (j, o) in out.iter_mut().enumerate().take(self.plan.cables.len()) {
             *o = cable_length(&self.plan, &self.b64, j);
         }
@@ -46,6 +49,9 @@ impl Workspace {
     /// Base internal force and moment of the current solution `(n(0), m(0))`.
     pub fn base_wrench(&self) -> (Vector3<f64>, Vector3<f64>) {
         let p = &self.plan;
+        if self.multi_active {
+            return self.multi.base_wrench();
+        }
         if p.closed_form {
             let m = Vector3::new(self.x[0], self.x[1], self.x[2]) * p.moment_scale;
             (p.closed_n0, m)
@@ -59,11 +65,17 @@ impl Workspace {
 
     /// Tip position of the last evaluated point (m).
     pub fn tip_position(&self) -> Vector3<f64> {
+        if self.multi_active {
+            return self.multi.tip();
+        }
         self.tip
     }
 
     /// Full solution of the current point (allocates: samples, poses, lengths).
     pub fn solution(&mut self) -> Solution {
+        if self.multi_active {
+            return self.multi.solution(&self.robot, &self.plan, self.report);
+        }
         let mut rec = Recording::default();
         self.b64.x.copy_from_slice(&self.x);
         let _ = pass(&self.plan, &mut self.b64, 1.0, Some(&mut rec));

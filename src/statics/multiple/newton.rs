@@ -1,0 +1,286 @@
+//! Residual, exact banded Jacobian and Newton with a backtracking line search for the
+//! multiple-shooting unknowns (layout in the module docs).
+
+use super::intervals::{integrate, LoadCtx};
+use super::{max_abs, norm2, Multi, BASE, NODE};
+use crate::integrate::State;
+use crate::math::{exp_so3, Dual, Real};
+use crate::statics::plan::Plan;
+use crate::statics::SolveStatus;
+
+/// A reused (chord) factorisation's full step must shrink `||r||_2` by this factor.
+const CHORD_CONTRACTION: f64 = 0.1;
+/// Chord steps per factorisation before it is refreshed anyway.
+const MAX_CHORD_STEPS: usize = 8;
+use nalgebra::{Matrix3, Vector3};
+
+/// `vee((E - E^T)/2)`: the rotation mismatch of `E = R_next^T R_end` (zero when the
+/// two frames agree; the rotation vector to first order).
+#[inline]
+fn skew_vee<T: Real>(e: &Matrix3<T>) -> Vector3<T> {
+    Vector3::new(
+        (e[(2, 1)] - e[(1, 2)]).scale(0.5),
+        (e[(0, 2)] - e[(2, 0)]).scale(0.5),
+        (e[(1, 0)] - e[(0, 1)]).scale(0.5),
+    )
+}
+
+/// Residual rows of interval `k` from its end state `y` and the next node `next`
+/// (`None`: the free tip, `n(L+) = m(L+) = 0`, thesis table 2.1), into `out`.
+fn residual_rows<T: Real>(plan: &Plan, y: &State<T>, next: Option<&State<f64>>, out: &mut [T]) {
+    let (fs, ms) = (plan.force_scale, plan.moment_scale);
+    match next {
+        Some(nx) => {
+            let e = nx.rot.map(T::cst).transpose() * y.rot;
+            let rho = skew_vee(&e);
+            for a in 0..3 {
+                out[a] = rho[a];
+                out[3 + a] = (y.n[a] - T::cst(nx.n[a])).scale(1.0 / fs);
+                out[6 + a] = (y.m[a] - T::cst(nx.m[a])).scale(1.0 / ms);
+            }
+        }
+        None => {
+            for a in 0..3 {
+                out[a] = y.n[a].scale(1.0 / fs);
+                out[3 + a] = y.m[a].scale(1.0 / ms);
+            }
+        }
+    }
+}
+
+impl Multi {
+    /// Residual at the node states (`trial`: at `trial`, into `res_trial`); also the
+    /// interval end states and each node's position. `false` when a pass failed.
+    pub(super) fn eval(&mut self, plan: &Plan, ld: LoadCtx, trial: bool) -> bool {
+        let Some(layout) = self.layout.as_ref() else {
+            return false;
+        };
+        let (states, res) = if trial {
+            (&mut self.trial, &mut self.res_trial)
+        } else {
+            (&mut self.nodes, &mut self.res)
+        };
+        let kn = layout.len();
+        for k in 0..kn {
+            let out = integrate::<f64>(
+                plan,
+                layout,
+                k,
+                states[k],
+                ld,
+                &mut self.rhs_evals,
+                None,
+                &mut |_, _| {},
+            );
+            let Ok(y) = out else {
+                res.fill(f64::INFINITY);
+                return false;
+            };
+            self.ends[k] = y;
+            let row = NODE * k;
+            let width = if k + 1 < kn { NODE } else { BASE };
+            residual_rows(plan, &y, states.get(k + 1), &mut res[row..row + width]);
+            if k + 1 < kn {
+                states[k + 1].r = y.r;
+            }
+        }
+        res.iter().all(|r| r.is_finite())
+    }
+
+    /// Exact Jacobian at the node states into the banded LU (one `Dual<9>` pass per
+    /// interval). `false` when a pass failed.
+    pub(super) fn jacobian(&mut self, plan: &Plan, ld: LoadCtx) -> bool {
+        let Some(layout) = self.layout.as_ref() else {
+            return false;
+        };
+        self.jac_evals += 1;
+        self.lu.clear();
+        let kn = layout.len();
+        let (fs, ms) = (plan.force_scale, plan.moment_scale);
+        for k in 0..kn {
+            let y0 = seeded(&self.nodes[k], k == 0, fs, ms);
+            let out = integrate::<Dual<NODE>>(
+                plan,
+                layout,
+                k,
+                y0,
+                ld,
+                &mut self.rhs_evals,
+                None,
+                &mut |_, _| {},
+            );
+            let Ok(y) = out else {
+                return false;
+            };
+            let last = k + 1 == kn;
+            let next = (!last).then(|| &self.nodes[k + 1]);
+            let mut rows = [Dual::<NODE>::constant(0.0); NODE];
+            residual_rows(plan, &y, next, &mut rows);
+            let (row, c0) = (NODE * k, Self::offset(k));
+            let (width, dirs) = (
+                if last { BASE } else { NODE },
+                if k == 0 { BASE } else { NODE },
+            );
+            for (i, r) in rows.iter().take(width).enumerate() {
+                for d in 0..dirs {
+                    self.lu.set(row + i, c0 + d, r.d[d]);
+                }
+            }
+            if let Some(nx) = next {
+                // d/d(node k + 1): -(tr E I - E)/2 for the rotation rows, -I otherwise
+                let e = nx.rot.transpose() * y.rot.map(|x| x.re());
+                let blk = (Matrix3::identity() * e.trace() - e) * -0.5;
+                let c1 = Self::offset(k + 1);
+                for i in 0..3 {
+                    for j in 0..3 {
+                        self.lu.set(row + i, c1 + j, blk[(i, j)]);
+                    }
+                }
+                for i in 3..NODE {
+                    self.lu.set(row + i, c1 + i, -1.0);
+                }
+            }
+        }
+        true
+    }
+
+    /// `dst = src (+) alpha dx`: base node `n, m`; other nodes `R <- R exp(theta^)`,
+    /// `n`, `m` (scaled by `F`, `M`).
+    pub(super) fn step_into(&mut self, plan: &Plan, alpha: f64, to_trial: bool) {
+        let (fs, ms) = (plan.force_scale, plan.moment_scale);
+        let (src, dst) = if to_trial {
+            (&self.nodes, &mut self.trial)
+        } else {
+            (&self.ok, &mut self.nodes)
+        };
+        let dx = if to_trial { &self.dx } else { &self.tan };
+        for (k, (s, d)) in src.iter().zip(dst.iter_mut()).enumerate() {
+            *d = *s;
+            let o = Self::offset(k);
+            let v = |i: usize| Vector3::new(dx[i], dx[i + 1], dx[i + 2]) * alpha;
+            if k == 0 {
+                d.n += v(o) * fs;
+                d.m += v(o + 3) * ms;
+            } else {
+                d.rot = s.rot * exp_so3(&v(o));
+                d.n += v(o + 3) * fs;
+                d.m += v(o + 6) * ms;
+            }
+        }
+    }
+
+    /// Newton at the current node states until `max_abs(res) <= tol`, at most
+    /// `max_jacobians` fresh Jacobians. A factorisation left from an earlier point
+    /// (the chord method) is reused while its full step shrinks `||r||_2` by
+    /// [`CHORD_CONTRACTION`]; a fresh exact Jacobian's step gets a backtracking line
+    /// search. Adds the accepted steps to `moved`; counts fresh Jacobians in `fresh`.
+    pub(super) fn newton(
+        &mut self,
+        plan: &Plan,
+        ld: LoadCtx,
+        tol: f64,
+        max_jacobians: usize,
+    ) -> (SolveStatus, usize) {
+        self.fresh = 0;
+        if !self.eval(plan, ld, false) {
+            return (SolveStatus::NonFinite, 0);
+        }
+        let n = self.n_unknowns();
+        let mut it = 0;
+        let mut chord_steps = 0;
+        loop {
+            if max_abs(&self.res) <= tol {
+                return (SolveStatus::Converged, it);
+            }
+            if chord_steps >= MAX_CHORD_STEPS {
+                self.lu_valid = false;
+            }
+            let fresh = !self.lu_valid;
+            if fresh && self.fresh >= max_jacobians {
+                return (SolveStatus::MaxIterations, it);
+            }
+            it += 1;
+            if fresh {
+                self.fresh += 1;
+                chord_steps = 0;
+                if !self.jacobian(plan, ld) {
+                    return (SolveStatus::NonFinite, it);
+                }
+                match self.lu.factor() {
+                    Some(rc) if rc > 1e-14 => self.lu_valid = true,
+                    _ => return (SolveStatus::IllConditioned, it),
+                }
+            }
+            for i in 0..n {
+                self.dx[i] = -self.res[i];
+            }
+            self.lu.solve_in_place(&mut self.dx);
+            let f0 = norm2(&self.res);
+            if !fresh {
+                chord_steps += 1;
+                self.step_into(plan, 1.0, true);
+                if self.eval(plan, ld, true) && norm2(&self.res_trial) < CHORD_CONTRACTION * f0 {
+                    self.accept(1.0);
+                } else {
+                    self.lu_valid = false;
+                }
+                continue;
+            }
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            for _ in 0..30 {
+                self.step_into(plan, alpha, true);
+                if self.eval(plan, ld, true) && norm2(&self.res_trial) < (1.0 - 1e-4 * alpha) * f0 {
+                    accepted = true;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if !accepted {
+                self.eval(plan, ld, false);
+                self.lu_valid = false;
+                return (SolveStatus::Stalled, it);
+            }
+            self.accept(alpha);
+            if alpha < 1.0 {
+                // far from the solution: do not reuse this Jacobian
+                self.lu_valid = false;
+            }
+        }
+    }
+
+    /// Take the trial point (reached by `alpha dx`) as the current one.
+    fn accept(&mut self, alpha: f64) {
+        std::mem::swap(&mut self.nodes, &mut self.trial);
+        std::mem::swap(&mut self.res, &mut self.res_trial);
+        for (m, d) in self.moved.iter_mut().zip(&self.dx) {
+            *m += alpha * d;
+        }
+    }
+}
+
+/// Node state with the dual directions of its unknowns: the base node's `n`, `m`
+/// (directions 0..6), another node's rotation increment (`dR = R e_a^`, directions
+/// 0..3), `n` and `m` (3..9), each per unit of the scaled unknown.
+fn seeded(y: &State<f64>, base: bool, fs: f64, ms: f64) -> State<Dual<NODE>> {
+    let mut out = State {
+        r: y.r.map(Dual::constant),
+        rot: y.rot.map(Dual::constant),
+        n: y.n.map(Dual::constant),
+        m: y.m.map(Dual::constant),
+    };
+    let (dn, dm) = if base { (0, 3) } else { (3, 6) };
+    for a in 0..3 {
+        out.n[a].d[dn + a] = fs;
+        out.m[a].d[dm + a] = ms;
+        if !base {
+            let mut e = Vector3::zeros();
+            e[a] = 1.0;
+            let dr = y.rot * crate::math::skew(&e);
+            for (x, d) in out.rot.iter_mut().zip(dr.iter()) {
+                x.d[a] = *d;
+            }
+        }
+    }
+    out
+}
