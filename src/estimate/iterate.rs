@@ -164,7 +164,7 @@ impl<M: EstimationModel> Estimator<M> {
                                 pred -= 0.5 * self.step[a] * self.h[a * p + b] * self.step[b];
                             }
                         }
-                        if pred > 1e-9 * (1.0 + cost) {
+                        if pred > super::STATIONARY_DECREASE + 1e-9 * cost {
                             self.cost = cost;
                             return EstimateStatus::Stalled;
                         }

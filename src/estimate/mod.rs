@@ -78,6 +78,15 @@ use thiserror::Error;
 
 /// LM damping above which a tiny step is `Stalled`, not `Converged`.
 const LM_MAX_CONVERGED_DAMPING: f64 = 1e2;
+/// A heavily damped tiny step is `Converged` when the undamped Gauss-Newton model
+/// predicts a cost decrease below this (plus `1e-9 cost`), in whitened cost units
+/// (`0.5 sum (r/sigma)^2`): the undamped step is then under `sqrt(2e-6)` = 1.4e-3
+/// standard deviations (Mahalanobis), below what the data resolve and at the level
+/// of the forward model's own noise (a tendon solve's 1e-12 m length tolerance is
+/// ~1e-7 N in a stiff tendon's tension, 1e-5 of a 0.01 N load-cell sigma, so near
+/// the optimum trial costs differ by noise and LM's damping grows). Above it the
+/// point is not stationary and the estimate is `Stalled`.
+const STATIONARY_DECREASE: f64 = 1e-6;
 /// Trial steps per iteration before giving up.
 const MAX_TRIALS: usize = 60;
 
