@@ -14,16 +14,19 @@
 //! Columns are compared per typical size of their parameter (scene: its scale, the
 //! start value; rotation: 1 rad; translation and offset: 0.2 m, the robot length,
 //! as the fit scales them), in whitened residuals (sigma = 1e-4 m). Tolerance, per
-//! column: `|J - CD| <= 1e-4 max|CD| + 1e-4`, and every column must move the
+//! column: `|J - CD| <= 1e-4 max|CD| + 1e-3`, and every column must move the
 //! residuals (`max|CD| > 0.1`: a parameter the rows cannot see would pass
 //! vacuously). Sources of disagreement: truncation `h^2 f'''/6`, about 1e-8
 //! relative at h = 1e-4; the rotation columns' inner differences of `exp(w)`
 //! (step 1e-7), ~1e-9 relative; the forward solves' residual noise (tendon
 //! tolerance 1e-12 m, shooting 1e-10 scaled) over the fit's step (1e-5 of the
 //! parameter): at most ~1e-3 whitened if every solve stopped just at its
-//! tolerance, far less in practice (Newton ends well below it). Seen on 12 cases:
-//! at most 1e-5 (the pretension column, 5e-6 relative), below 1e-7 for the frame
-//! and offset. A wrong sign, a missing offset term or a derivative of the wrong
+//! tolerance, far less in practice (Newton ends well below it), hence the absolute
+//! 1e-3. Seen on 12 cases: at most 1e-5 (the pretension column, 5e-6 relative),
+//! below 1e-7 for the frame and offset; one case CI drew (kept in
+//! `calibrate_sensitivities.proptest-regressions`) reached 5.6e-4 in the modulus
+//! column on one residual, inside that noise bound (the 1e-4 it was first held to was
+//! below the bound this paragraph derives). A wrong sign, a missing offset term or a derivative of the wrong
 //! pose is O(1) relative (at least 0.1 here) and fails.
 
 use cablesense::calibrate::{
@@ -166,7 +169,7 @@ proptest! {
             prop_assert!(size > 0.1, "column {} does not move the residuals: {}", k, size);
             println!("column {k}: max |CD| {size:.3e}, max |J - CD| {worst:.3e}");
             prop_assert!(
-                worst <= 1e-4 * size + 1e-4,
+                worst <= 1e-4 * size + 1e-3,
                 "column {}: J {:?} CD {:?}",
                 k,
                 jac.column(k).as_slice(),
