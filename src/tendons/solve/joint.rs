@@ -79,6 +79,8 @@ pub(super) struct JointBufs {
     f_prev: Vec<f64>,
     step: Vec<f64>,
     hy: Vec<f64>,
+    /// `s^T H` of the Broyden update.
+    sth: Vec<f64>,
     /// `|| [r / tol; G / tol_G] ||_2` at the last evaluation (line-search merit).
     l2: f64,
 }
@@ -100,6 +102,7 @@ impl JointBufs {
             f_prev: vec![0.0; n + p],
             step: vec![0.0; n + p],
             hy: vec![0.0; n + p],
+            sth: vec![0.0; n + p],
             lu_taut: vec![true; p],
             lu_valid: false,
             first_chord_ok: true,
@@ -336,17 +339,12 @@ impl TendonWorkspace {
         if den.abs() <= 1e-12 * ss.max(f64::MIN_POSITIVE) || !den.is_finite() {
             return;
         }
-        // w^T = s^T H
-        let mut w = [0.0; 64];
-        if m > w.len() {
-            return;
-        }
-        for (c, wc) in w[..m].iter_mut().enumerate() {
+        for (c, wc) in jb.sth.iter_mut().enumerate() {
             *wc = (0..m).map(|r| jb.step[r] * jb.h[r * m + c]).sum();
         }
         for (r, row) in jb.h.chunks_exact_mut(m).enumerate() {
             let u = (jb.step[r] - jb.hy[r]) / den;
-            for (hc, wc) in row.iter_mut().zip(&w[..m]) {
+            for (hc, wc) in row.iter_mut().zip(&jb.sth) {
                 *hc += u * wc;
             }
         }
