@@ -73,29 +73,29 @@ impl ModelError {
     }
     /// Check that `value` is finite and > 0.
     pub fn positive(field: impl Into<String>, value: f64) -> Result<f64, Self> {
+        // The field name is converted only on the error path (validation runs on every
+        // `set_loads` of a control loop).
+        if value > 0.0 && value.is_finite() {
+            return Ok(value);
+        }
         let field = field.into();
         Self::finite(field.clone(), value)?;
-        if value > 0.0 {
-            Ok(value)
-        } else {
-            Err(Self::NonPositive { field, value })
-        }
+        Err(Self::NonPositive { field, value })
     }
     /// Check that `value` is finite and >= 0.
     pub fn non_negative(field: impl Into<String>, value: f64) -> Result<f64, Self> {
+        if value >= 0.0 && value.is_finite() {
+            return Ok(value);
+        }
         let field = field.into();
         Self::finite(field.clone(), value)?;
-        if value >= 0.0 {
-            Ok(value)
-        } else {
-            Err(Self::Negative { field, value })
-        }
+        Err(Self::Negative { field, value })
     }
     /// Check that every component of a vector is finite.
     pub fn finite3(field: &str, v: &[f64; 3]) -> Result<(), Self> {
-        for (i, x) in v.iter().enumerate() {
-            Self::finite(format!("{field}[{i}]"), *x)?;
+        match v.iter().position(|x| !x.is_finite()) {
+            None => Ok(()),
+            Some(i) => Self::finite(format!("{field}[{i}]"), v[i]).map(|_| ()),
         }
-        Ok(())
     }
 }

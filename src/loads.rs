@@ -71,6 +71,17 @@ impl Loads {
     pub fn validate(&self, robot: &Robot) -> Result<(), ModelError> {
         ModelError::finite3("loads.gravity_m_s2", &self.gravity_m_s2)?;
         for (i, p) in self.point.iter().enumerate() {
+            // Field names are formatted only when a check fails: this runs on every
+            // `set_loads` of a control loop.
+            let ok = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
+            if p.section < robot.sections().len()
+                && ok(&p.force_n)
+                && ok(&p.torque_nm)
+                && p.mass_kg.is_finite()
+                && p.mass_kg >= 0.0
+            {
+                continue;
+            }
             let f = format!("loads.point[{i}]");
             if p.section >= robot.sections().len() {
                 return Err(ModelError::BadIndex {
@@ -90,8 +101,12 @@ impl Loads {
                 count: robot.cables().len(),
             });
         }
-        for (j, t) in self.tensions_n.iter().enumerate() {
-            ModelError::non_negative(format!("loads.tensions_n[{j}]"), *t)?;
+        if let Some(j) = self
+            .tensions_n
+            .iter()
+            .position(|t| !(t.is_finite() && *t >= 0.0))
+        {
+            ModelError::non_negative(format!("loads.tensions_n[{j}]"), self.tensions_n[j])?;
         }
         Ok(())
     }

@@ -82,6 +82,9 @@ pub(crate) fn active<T: Real>(
     iv: &Interval,
     load_scale: f64,
 ) -> Option<Active<T>> {
+    if plan.routed.is_empty() {
+        return None;
+    }
     let tol = 1e-12 * plan.length;
     let mut a = Active {
         n: 0,
