@@ -153,3 +153,40 @@ fn tdcr_readings_sweep() {
     assert!(r[0].warm_s < r[1].warm_s);
     assert!(r.iter().all(|r| r.tick_s.is_nan() && r.est_err.is_nan()));
 }
+
+/// Till's tendon robot (`data/scenes/till_tendon_robot.toml`, four continuously routed
+/// tendons): the default ladder leaves out CC and PCC (they model tendons as chords
+/// between disks; `ladder::reject_continuous`), every rod rung converges on the whole
+/// load sweep, and the finest (Cosserat, adaptive 1e-10) is within 1e-9 m of the
+/// reference (Cosserat, adaptive 1e-12: the same model at a tighter tolerance; measured
+/// 9.1e-12 m with `cablesense pareto`); the estimator ticks run on continuous routing.
+#[test]
+fn continuous_routing_is_ranked_on_the_rod_rungs() {
+    let sc = Scene::load("data/scenes/till_tendon_robot.toml").unwrap();
+    let robot = sc.build_robot().unwrap();
+    let ladder = cablesense::ladder::full_ladder(&robot);
+    assert!(ladder.iter().all(|r| matches!(r, Rung::Rod(_))));
+    assert_eq!(ladder.len(), 18, "2 rod models x 9 integrators, no disks");
+    assert!(cablesense::ladder::auto_ladder(&robot)
+        .iter()
+        .all(|r| matches!(r, Rung::Rod(_))));
+    let s = ParetoSettings {
+        reps: 1,
+        estimator: true,
+        rungs: None,
+    };
+    assert_eq!(pareto::rung_count(&robot, &s), 18);
+    let res = pareto::run_scene("till", &sc, None, &s, &mut |_| {}).unwrap();
+    assert_eq!(res.rows.len(), 18);
+    assert!(res
+        .rows
+        .iter()
+        .all(|r| r.loads_converged == r.loads_total && r.loads_total == 5));
+    let finest = res
+        .rows
+        .iter()
+        .find(|r| r.rung.label() == "cosserat/none/adaptive-1e-10")
+        .unwrap();
+    assert!(finest.tip_err < 1e-9, "{}", finest.tip_err);
+    assert!(res.rows.iter().all(|r| r.est_err.is_finite()));
+}

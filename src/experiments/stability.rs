@@ -171,17 +171,20 @@ pub struct StabilityMap {
     pub points: Vec<StabilityPoint>,
 }
 
-/// The forward settings of the map: CC, PCC 8 (point mass), and Kirchhoff and
-/// Cosserat with point guide mass at RK4 8, RK4 32 and adaptive 1e-8.
-pub fn forward_settings() -> Vec<Rung> {
-    let mut v = vec![
-        Rung::ConstantCurvature(CcSettings::default()),
-        Rung::PiecewiseConstantCurvature(PccSettings {
+/// The forward settings of the map on `robot`: CC, PCC 8 (point mass), and Kirchhoff
+/// and Cosserat with point guide mass at RK4 8, RK4 32 and adaptive 1e-8. The
+/// curvature rungs are left out when a tendon is routed continuously
+/// ([`crate::ladder::reject_continuous`]).
+pub fn forward_settings(robot: &Robot) -> Vec<Rung> {
+    let mut v = Vec::new();
+    if crate::ladder::reject_continuous(robot).is_ok() {
+        v.push(Rung::ConstantCurvature(CcSettings::default()));
+        v.push(Rung::PiecewiseConstantCurvature(PccSettings {
             pieces_per_section: 8,
             guide_mass: GuideMass::Point,
             ..PccSettings::default()
-        }),
-    ];
+        }));
+    }
     for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
         for integrator in [
             Integrator::Rk4 {
@@ -247,7 +250,7 @@ fn forward_map(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(), ExperimentError> {
     let l = robot.length();
-    for rung in forward_settings() {
+    for rung in forward_settings(robot) {
         progress(Progress::Step(format!("{}: {}", dir.short(), rung.label())));
         for &start in starts_for(&rung) {
             let rung_here = match (&rung, start) {
@@ -302,7 +305,7 @@ fn forward_map(
 /// Units of work [`run`] reports (for a progress bar): per direction the reference,
 /// every forward setting and every estimation method; plus the readings map.
 pub fn step_count(robot: &Robot, settings: &StabilitySettings) -> usize {
-    let per_dir = 1 + forward_settings().len() + super::stability_estimate::METHODS.len();
+    let per_dir = 1 + forward_settings(robot).len() + super::stability_estimate::METHODS.len();
     let dirs = map_directions(robot, settings).len();
     let readings = if settings.readings && super::pareto::is_tdcr(robot) {
         1 + super::tdcr::readings_settings().len()

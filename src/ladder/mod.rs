@@ -298,13 +298,18 @@ pub fn guide_mass_choices(robot: &Robot) -> Vec<GuideMass> {
     }
 }
 
-/// The full ladder used by `cablesense pareto`: CC; PCC at 4..32 pieces per section;
+/// The full ladder used by `cablesense pareto`: CC; PCC at 4..32 pieces per section
+/// (both left out on a robot with continuously routed tendons: [`reject_continuous`]);
 /// Kirchhoff and Cosserat with every relevant guide-mass model, RK4 at 4..64 steps
 /// per section and the adaptive pair at tol 1e-4..1e-10.
 pub fn full_ladder(robot: &Robot) -> Vec<Rung> {
-    let mut out = vec![Rung::ConstantCurvature(CcSettings::default())];
+    let mut out = Vec::new();
+    let curvature = reject_continuous(robot).is_ok();
+    if curvature {
+        out.push(Rung::ConstantCurvature(CcSettings::default()));
+    }
     let masses = guide_mass_choices(robot);
-    for &g in &masses {
+    for &g in masses.iter().filter(|_| curvature) {
         for pieces in [4, 8, 16, 32] {
             out.push(Rung::PiecewiseConstantCurvature(PccSettings {
                 pieces_per_section: pieces,
@@ -342,9 +347,13 @@ pub fn full_ladder(robot: &Robot) -> Vec<Rung> {
 /// CC; PCC 4/16; Kirchhoff and Cosserat with each guide-mass model at RK4 4, 8, 16,
 /// 32, 64 steps per section and adaptive 1e-8.
 pub fn auto_ladder(robot: &Robot) -> Vec<Rung> {
-    let mut out = vec![Rung::ConstantCurvature(CcSettings::default())];
+    let mut out = Vec::new();
+    let curvature = reject_continuous(robot).is_ok();
+    if curvature {
+        out.push(Rung::ConstantCurvature(CcSettings::default()));
+    }
     let masses = guide_mass_choices(robot);
-    for &g in &masses {
+    for &g in masses.iter().filter(|_| curvature) {
         for pieces in [4, 16] {
             out.push(Rung::PiecewiseConstantCurvature(PccSettings {
                 pieces_per_section: pieces,
@@ -403,7 +412,11 @@ pub(crate) fn add_params(
 /// `tests/continuous_routing.rs`, `straight_tendon_without_gravity_is_an_exact_arc`);
 /// a helical or tabulated path does not (`r(s)` turns, and the tendon's moment and
 /// distributed force turn with it), so no CC rung can represent it.
-pub(crate) fn reject_continuous(robot: &Robot) -> Result<(), LadderError> {
+///
+/// The ladders ([`full_ladder`], [`auto_ladder`], [`readings_ladder`]) leave the
+/// curvature rungs out on such a robot, so `pareto`, `stability` and `--model auto`
+/// rank the rod rungs only.
+pub fn reject_continuous(robot: &Robot) -> Result<(), LadderError> {
     match robot.cables().iter().position(|c| c.path.is_some()) {
         Some(j) => Err(LadderError::Model(ModelError::Invalid {
             field: format!("robot.cables[{j}].routing"),

@@ -138,8 +138,12 @@ fn zeros(robot: &Robot) -> Vec<f64> {
 /// iteration of shooting solves, so the finer adaptive settings of the full ladder
 /// would dominate the sweep's time without adding a point to the front.
 pub fn readings_ladder(robot: &Robot) -> Vec<Rung> {
-    let mut out = vec![Rung::ConstantCurvature(CcSettings::default())];
-    for pieces in [4, 16] {
+    let mut out = Vec::new();
+    let curvature = super::reject_continuous(robot).is_ok();
+    if curvature {
+        out.push(Rung::ConstantCurvature(CcSettings::default()));
+    }
+    for pieces in [4, 16].into_iter().filter(|_| curvature) {
         out.push(Rung::PiecewiseConstantCurvature(PccSettings {
             pieces_per_section: pieces,
             guide_mass: crate::settings::GuideMass::None,

@@ -86,6 +86,10 @@ fn parse_len(s: &str) -> Result<f64, String> {
 /// lists the valid labels after `extra` (the command's other choices).
 pub fn rung_by_label(robot: &cablesense::Robot, label: &str, extra: &str) -> anyhow::Result<Rung> {
     let all = ladder::full_ladder(robot);
+    if label == "cc" || label.starts_with("pcc/") {
+        // not in this robot's ladder when a tendon is routed continuously: say why
+        ladder::reject_continuous(robot)?;
+    }
     let found = all.iter().find(|r| r.label() == label).cloned();
     found.with_context(|| {
         format!(
