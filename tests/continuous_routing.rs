@@ -626,3 +626,28 @@ fn curvature_rungs_refuse_continuous_tendons() {
         .unwrap();
     assert!(e.to_string().contains("continuous routing"), "{e}");
 }
+
+/// Till's robot with its continuous tendons driven by displacement is refused with
+/// an error naming the cable's `actuation` (the readings solve measures tendon paths
+/// through disk holes; continuous lengths are not wired into it yet), not the
+/// misleading "no free length" of a zero hole-path length it gave before.
+#[test]
+fn displacement_driven_continuous_tendons_are_refused_by_name() {
+    let text = std::fs::read_to_string(TILL)
+        .unwrap()
+        .replace(
+            "end_section = 0\n",
+            "end_section = 0\nactuation = \"displacement\"\n",
+        )
+        .replace(
+            "[loads]",
+            "[robot.tendons]\nstiffness_n = 2.0e4\npretension_n = 2.0\n\n[loads]",
+        )
+        .replace("tensions_n = [15.0, 0.0, 0.0, 0.0]\n", "");
+    let sc = Scene::from_toml_str(&text).unwrap();
+    let e = sc.build_robot().unwrap_err().to_string();
+    assert!(
+        e.contains("robot.cables[0].actuation") && e.contains("continuously routed"),
+        "{e}"
+    );
+}

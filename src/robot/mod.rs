@@ -201,6 +201,15 @@ impl Robot {
         c: &spec::CableSpec,
         j: usize,
     ) -> Result<Cable, ModelError> {
+        if c.actuation == crate::tendons::Actuation::Displacement {
+            // The readings solve (src/tendons) measures each driven tendon's path and
+            // its derivatives through the disk holes; a continuous path's length is an
+            // integral of the shooting pass instead, not wired into that solve yet.
+            return Err(ModelError::Invalid {
+                field: format!("robot.cables[{j}].actuation"),
+                why: "displacement actuation of a continuously routed tendon is not supported yet: drive it by tension (its length change is still computed) or route it through disks".into(),
+            });
+        }
         let field = format!("robot.cables[{j}].path");
         let end_s = sections[c.end_section].end();
         let max_radius = spec.sections[..=c.end_section]
