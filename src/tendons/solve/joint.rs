@@ -42,6 +42,23 @@ const MAX_STEP: f64 = 100.0;
 const CHORD_PROBE: usize = 16;
 /// A reused (chord) Jacobian's step must shrink the merit by this factor.
 const CHORD_CONTRACTION: f64 = 0.1;
+/// Continuation steps of a row aim at first Newton steps of this size (a fraction of
+/// [`MAX_STEP`], so that the step's nonlinearity leaves room).
+const SUBSTEP_SIZE: f64 = 0.5 * MAX_STEP;
+/// Most continuation steps of one row (a row further away goes to the nested method).
+const MAX_SUBSTEPS: usize = 16;
+/// Merit at which an intermediate continuation step is done (in units of the
+/// tolerances, like the merit): it only has to start the next one within Newton's
+/// reach, which a residual of 1e4 tolerances (~1e-6 in the scaled unknowns) does.
+const SUBSTEP_MERIT: f64 = 1e4;
+
+/// Continuation steps for a row whose first Newton step was `first` (largest
+/// component in the scaled shooting unknowns): `None` when it is unknown (the first
+/// pass or factorisation failed) or needs more than [`MAX_SUBSTEPS`]. At least 2.
+fn joint_substeps(first: f64) -> Option<usize> {
+    let k = (first / SUBSTEP_SIZE).ceil();
+    (k.is_finite() && k <= MAX_SUBSTEPS as f64).then_some((k as usize).max(2))
+}
 
 /// Buffers of the joint path, sized once.
 #[derive(Clone)]
@@ -81,6 +98,10 @@ pub(super) struct JointBufs {
     hy: Vec<f64>,
     /// `s^T H` of the Broyden update.
     sth: Vec<f64>,
+    /// Free lengths of the driven tendons (m) at the row's starting point (the
+    /// previous row's) and at the row (continuation steps go from one to the other).
+    pub(super) free_prev: Vec<f64>,
+    free_row: Vec<f64>,
     /// `|| [r / tol; G / tol_G] ||_2` at the last evaluation (line-search merit).
     l2: f64,
 }
@@ -103,6 +124,8 @@ impl JointBufs {
             step: vec![0.0; n + p],
             hy: vec![0.0; n + p],
             sth: vec![0.0; n + p],
+            free_prev: vec![0.0; p],
+            free_row: vec![0.0; p],
             lu_taut: vec![true; p],
             lu_valid: false,
             first_chord_ok: true,
@@ -116,27 +139,77 @@ impl TendonWorkspace {
     /// The joint Newton from the current (warm) point. `true` when it converged
     /// (the workspace then holds the row's solution); `false` when it handed back,
     /// with the row's starting point restored.
+    ///
+    /// When the row's first Newton step leaves the warm start's neighbourhood
+    /// (larger than [`MAX_STEP`]) or its line search fails, the row is retried by
+    /// continuation in the readings: the free lengths go from those of the starting
+    /// point to the row's in [`joint_substeps`] equal steps, each solved by the same
+    /// Newton from the last (the equilibrium path parametrised by the readings, so
+    /// every Newton step stays within [`MAX_STEP`]). Why: on the FTDCR v4 recording
+    /// (rows ~1 s apart) 6 rows of 200 step 170-340 in the scaled unknowns; handed
+    /// back, the nested method's checked solves cost them 30k-250k `f64` right-hand
+    /// sides each, half of all the work of the 200 rows, where 3-5 continuation steps
+    /// cost a few thousand. The nested method remains the fallback when a
+    /// continuation step fails too.
     pub(super) fn solve_joint(&mut self) -> bool {
-        let n = self.ws.unknowns();
         let p = self.driven.len();
         self.joint.x0.copy_from_slice(self.ws.unknowns_vector());
         self.joint.t0.copy_from_slice(&self.t);
         self.joint.x.copy_from_slice(&self.joint.x0);
-        let Some(mut merit) = self.joint_evaluate() else {
+        let first = match self.joint_newton(1.0) {
+            Ok(()) => return true,
+            Err(first) => first,
+        };
+        // continuation, when the first fresh step says how far the row is (from the
+        // free lengths of the starting point: the previous row's)
+        let Some(k_steps) = joint_substeps(first) else {
             return self.joint_hand_back();
+        };
+        let mut iterations = self.report.iterations;
+        self.joint.free_row.copy_from_slice(&self.free);
+        self.t.copy_from_slice(&self.joint.t0);
+        self.joint.x.copy_from_slice(&self.joint.x0);
+        for k in 1..=k_steps {
+            let s = k as f64 / k_steps as f64;
+            for i in 0..p {
+                let (a, b) = (self.joint.free_prev[i], self.joint.free_row[i]);
+                self.free[i] = a + s * (b - a);
+            }
+            let tol = if k == k_steps { 1.0 } else { SUBSTEP_MERIT };
+            let out = self.joint_newton(tol);
+            iterations += self.report.iterations;
+            if out.is_err() {
+                self.free.copy_from_slice(&self.joint.free_row);
+                return self.joint_hand_back();
+            }
+        }
+        self.report.iterations = iterations;
+        true
+    }
+
+    /// Newton iterations of the joint path from `(joint.x, t)` until the merit is at
+    /// most `merit_tol` (1: converged). `Err` with the largest component of the first
+    /// fresh Newton step in the scaled shooting unknowns (infinite when unknown)
+    /// when it stopped without converging; the iterate is then unspecified.
+    fn joint_newton(&mut self, merit_tol: f64) -> Result<(), f64> {
+        let n = self.ws.unknowns();
+        let p = self.driven.len();
+        let mut first_step = f64::INFINITY;
+        let Some(mut merit) = self.joint_evaluate() else {
+            return Err(first_step);
         };
         for it in 0..JOINT_MAX_ITERATIONS {
             self.report.iterations = it;
-            if merit <= 1.0 {
-                if self.zero_slack_tensions() {
+            if merit <= merit_tol {
+                if merit_tol <= 1.0 && self.zero_slack_tensions() {
                     // a slack tendon carries exactly nothing (see the nested loop)
                     match self.joint_evaluate() {
                         Some(m) if m <= 1.0 => {}
-                        _ => return self.joint_hand_back(),
+                        _ => return Err(first_step),
                     }
                 }
                 self.report.status = SolveStatus::Converged;
-                return true;
+                return Ok(());
             }
             // a quasi-Newton step with the last Jacobian's inverse, Broyden-updated
             // since, when the active set is the same (a "chord" step below); a fresh
@@ -163,19 +236,22 @@ impl TendonWorkspace {
                     self.joint.x.copy_from_slice(&self.joint.xs);
                     self.t.copy_from_slice(&self.joint.ts);
                     if self.joint_evaluate().is_none() {
-                        return self.joint_hand_back();
+                        return Err(first_step);
                     }
                 }
                 if fresh && !self.joint_factor() {
-                    return self.joint_hand_back();
+                    return Err(first_step);
                 }
                 self.joint_step(n, p);
                 let dx_max = self.joint.dz[..n]
                     .iter()
                     .fold(0.0f64, |m, d| m.max(d.abs()));
+                if fresh && first_step.is_infinite() {
+                    first_step = dx_max;
+                }
                 if !dx_max.is_finite() || dx_max > MAX_STEP {
                     if fresh {
-                        return self.joint_hand_back();
+                        return Err(first_step);
                     }
                     continue;
                 }
@@ -193,7 +269,7 @@ impl TendonWorkspace {
                         } else {
                             CHORD_CONTRACTION * l2_before
                         };
-                        if self.joint.l2 < enough || m <= 1.0 {
+                        if self.joint.l2 < enough || m <= merit_tol {
                             accepted = Some(m);
                             break;
                         }
@@ -213,10 +289,10 @@ impl TendonWorkspace {
                     merit = m;
                     self.joint_broyden(n, p);
                 }
-                None => return self.joint_hand_back(),
+                None => return Err(first_step),
             }
         }
-        self.joint_hand_back()
+        Err(first_step)
     }
 
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
