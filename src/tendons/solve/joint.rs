@@ -29,7 +29,7 @@
 
 use super::TendonWorkspace;
 use crate::math::DenseLu;
-use crate::statics::SolveStatus;
+use crate::statics::{SolveStatus, LOCAL_TOL};
 
 /// Newton iterations of the joint path before it hands back.
 pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
@@ -40,8 +40,13 @@ pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
 const MAX_STEP: f64 = 100.0;
 /// While rows' first chord steps fail, every this many rows one tries it again.
 const CHORD_PROBE: usize = 16;
-/// A reused (chord) Jacobian's step must shrink the merit by this factor.
-const CHORD_CONTRACTION: f64 = 0.1;
+/// A reused (chord) Jacobian's step must shrink the merit by this factor. Why 0.5
+/// (was 0.1): a fresh Jacobian is one dual sweep over `Dual<21>`, about 15 `f64`
+/// passes (22 `f64` right-hand sides per dual one), and a Broyden step that halves
+/// the merit costs one pass; on the 443 FTDCR v4 val rows 0.5 cut the dual RHS per
+/// row 420 -> 345 for 6039 -> 6257 `f64` ones (0.9: 338 and 6296, about the same;
+/// always trying the chord at a row's start: 311 and 7286, worse).
+const CHORD_CONTRACTION: f64 = 0.5;
 /// Continuation steps of a row aim at first Newton steps of this size (a fraction of
 /// [`MAX_STEP`], so that the step's nonlinearity leaves room).
 const SUBSTEP_SIZE: f64 = 0.5 * MAX_STEP;
@@ -104,6 +109,8 @@ pub(super) struct JointBufs {
     free_row: Vec<f64>,
     /// `|| [r / tol; G / tol_G] ||_2` at the last evaluation (line-search merit).
     l2: f64,
+    /// Settle tolerance of the inner passes now in effect (fraction of the length).
+    inner_tol: f64,
 }
 
 impl JointBufs {
@@ -131,6 +138,7 @@ impl JointBufs {
             first_chord_ok: true,
             rows_fresh: 0,
             l2: f64::INFINITY,
+            inner_tol: LOCAL_TOL,
         }
     }
 }
@@ -201,6 +209,18 @@ impl TendonWorkspace {
         for it in 0..JOINT_MAX_ITERATIONS {
             self.report.iterations = it;
             if merit <= merit_tol {
+                if merit_tol <= 1.0 && self.joint.inner_tol > LOCAL_TOL {
+                    // the point was evaluated with loosely settled next holes: confirm
+                    // it with fully settled ones (what every reported point has)
+                    self.joint_inner_tolerance(0.0);
+                    match self.joint_evaluate() {
+                        Some(m) => merit = m,
+                        None => return Err(first_step),
+                    }
+                    if merit > merit_tol {
+                        continue;
+                    }
+                }
                 if merit_tol <= 1.0 && self.zero_slack_tensions() {
                     // a slack tendon carries exactly nothing (see the nested loop)
                     match self.joint_evaluate() {
@@ -255,6 +275,9 @@ impl TendonWorkspace {
                     }
                     continue;
                 }
+                // inexact inner solves while far away (as the shooting Newton does):
+                // the trial's next holes settle to 1e-10 of the iterate's residual
+                self.joint_inner_tolerance(merit);
                 let mut alpha = 1.0;
                 for _ in 0..if fresh { 8 } else { 1 } {
                     for i in 0..n {
@@ -293,6 +316,16 @@ impl TendonWorkspace {
             }
         }
         Err(first_step)
+    }
+
+    /// Settle tolerance of the next passes from the merit of the current iterate
+    /// (0: fully settled, `LOCAL_TOL`): `1e-10` of its residual `merit * tol` as a
+    /// fraction of the rod length, the rule of the shooting Newton (the boundary
+    /// residual moves by ~100-1000 times a scaled hole error, so the inner error stays
+    /// 1e-7 of the outer residual; near convergence the clamp makes it `LOCAL_TOL`).
+    fn joint_inner_tolerance(&mut self, merit: f64) {
+        let tol = self.ws.report().tolerance;
+        self.joint.inner_tol = self.ws.set_local_tolerance(1e-10 * merit * tol);
     }
 
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
@@ -428,6 +461,7 @@ impl TendonWorkspace {
 
     /// Restore the row's starting point for the nested method; `false`.
     fn joint_hand_back(&mut self) -> bool {
+        self.joint_inner_tolerance(0.0);
         self.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);
         self.joint.lu_valid = false;
