@@ -14,6 +14,7 @@ mod pass;
 mod plan;
 mod workspace;
 
+pub(crate) use pass::LOCAL_TOL;
 pub use pass::{Pose, Sample};
 pub use plan::ParamSite;
 pub use workspace::joint::RhsCounts;

@@ -274,6 +274,8 @@ impl TendonWorkspace {
                 });
             }
         }
+        // the reference is the point of zero readings
+        self.free.copy_from_slice(&self.free0);
         self.has_solution = true;
         Ok(())
     }
@@ -384,6 +386,8 @@ impl TendonWorkspace {
     ) -> Result<TendonReport, ModelError> {
         self.check_readings(readings_m)?;
         let p = self.driven.len();
+        // the free lengths the current point belongs to (joint path's continuation)
+        self.joint.free_prev.copy_from_slice(&self.free);
         for (i, reading) in readings_m.iter().enumerate() {
             let q = reading - self.mech[i].zero_offset_m;
             self.free[i] = self.free0[i] - q;

@@ -5,6 +5,7 @@
 //! A child module of `workspace` (declared there with `#[path]`), like `joint.rs`, so
 //! it reads the private pass buffer without widening its visibility.
 
+use super::super::pass::LOCAL_TOL;
 use super::Workspace;
 use nalgebra::Vector3;
 
@@ -40,5 +41,23 @@ impl Workspace {
     /// Per-chord tension factors of cable `j` now in effect.
     pub fn chord_factors(&self, j: usize) -> &[f64] {
         self.plan.cables.get(j).map_or(&[], |c| &c.factor[..])
+    }
+}
+
+impl Workspace {
+    /// Condensed coupling: tolerance of the next-hole settle of the following `f64`
+    /// passes, as a fraction of the rod length, clamped to `[LOCAL_TOL, 1e-9]`
+    /// (`LOCAL_TOL` = 1e-15 is the default and what every solve ends with); returns
+    /// the value set. For an outer iteration that evaluates points far from its
+    /// solution (inexact Newton: an inner error far below the outer residual does not
+    /// change the step); the caller restores `LOCAL_TOL` before it reports a point.
+    pub(crate) fn set_local_tolerance(&mut self, frac: f64) -> f64 {
+        let t = if frac.is_nan() {
+            LOCAL_TOL
+        } else {
+            frac.clamp(LOCAL_TOL, 1e-9)
+        };
+        self.b64.local_tol = t;
+        t
     }
 }

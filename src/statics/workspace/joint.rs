@@ -19,6 +19,10 @@ pub struct RhsCounts {
     /// with a fixed-step integrator, divide by the count of one `f64` pass to get
     /// the number of passes).
     pub dual_rhs: u64,
+    /// Condensed coupling: re-integrations of a disk gap by the local iteration on
+    /// the next-hole positions in `f64` passes (each costs one gap's right-hand
+    /// sides, included in `f64_rhs`).
+    pub local_iterations: u64,
 }
 
 impl Workspace {
@@ -134,6 +138,7 @@ impl Workspace {
             dual_rhs: self.b3.rhs_evals
                 + self.b6.rhs_evals
                 + self.wide.as_ref().map_or(0, Wide::rhs_evals),
+            local_iterations: self.b64.retries,
         }
     }
 }

@@ -29,7 +29,7 @@
 
 use super::TendonWorkspace;
 use crate::math::DenseLu;
-use crate::statics::SolveStatus;
+use crate::statics::{SolveStatus, LOCAL_TOL};
 
 /// Newton iterations of the joint path before it hands back.
 pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
@@ -40,8 +40,30 @@ pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
 const MAX_STEP: f64 = 100.0;
 /// While rows' first chord steps fail, every this many rows one tries it again.
 const CHORD_PROBE: usize = 16;
-/// A reused (chord) Jacobian's step must shrink the merit by this factor.
-const CHORD_CONTRACTION: f64 = 0.1;
+/// A reused (chord) Jacobian's step must shrink the merit by this factor. Why 0.5
+/// (was 0.1): a fresh Jacobian is one dual sweep over `Dual<21>`, about 15 `f64`
+/// passes (22 `f64` right-hand sides per dual one), and a Broyden step that halves
+/// the merit costs one pass; on the 443 FTDCR v4 val rows 0.5 cut the dual RHS per
+/// row 420 -> 345 for 6039 -> 6257 `f64` ones (0.9: 338 and 6296, about the same;
+/// always trying the chord at a row's start: 311 and 7286, worse).
+const CHORD_CONTRACTION: f64 = 0.5;
+/// Continuation steps of a row aim at first Newton steps of this size (a fraction of
+/// [`MAX_STEP`], so that the step's nonlinearity leaves room).
+const SUBSTEP_SIZE: f64 = 0.5 * MAX_STEP;
+/// Most continuation steps of one row (a row further away goes to the nested method).
+const MAX_SUBSTEPS: usize = 16;
+/// Merit at which an intermediate continuation step is done (in units of the
+/// tolerances, like the merit): it only has to start the next one within Newton's
+/// reach, which a residual of 1e4 tolerances (~1e-6 in the scaled unknowns) does.
+const SUBSTEP_MERIT: f64 = 1e4;
+
+/// Continuation steps for a row whose first Newton step was `first` (largest
+/// component in the scaled shooting unknowns): `None` when it is unknown (the first
+/// pass or factorisation failed) or needs more than [`MAX_SUBSTEPS`]. At least 2.
+fn joint_substeps(first: f64) -> Option<usize> {
+    let k = (first / SUBSTEP_SIZE).ceil();
+    (k.is_finite() && k <= MAX_SUBSTEPS as f64).then_some((k as usize).max(2))
+}
 
 /// Buffers of the joint path, sized once.
 #[derive(Clone)]
@@ -81,8 +103,14 @@ pub(super) struct JointBufs {
     hy: Vec<f64>,
     /// `s^T H` of the Broyden update.
     sth: Vec<f64>,
+    /// Free lengths of the driven tendons (m) at the row's starting point (the
+    /// previous row's) and at the row (continuation steps go from one to the other).
+    pub(super) free_prev: Vec<f64>,
+    free_row: Vec<f64>,
     /// `|| [r / tol; G / tol_G] ||_2` at the last evaluation (line-search merit).
     l2: f64,
+    /// Settle tolerance of the inner passes now in effect (fraction of the length).
+    inner_tol: f64,
 }
 
 impl JointBufs {
@@ -103,11 +131,14 @@ impl JointBufs {
             step: vec![0.0; n + p],
             hy: vec![0.0; n + p],
             sth: vec![0.0; n + p],
+            free_prev: vec![0.0; p],
+            free_row: vec![0.0; p],
             lu_taut: vec![true; p],
             lu_valid: false,
             first_chord_ok: true,
             rows_fresh: 0,
             l2: f64::INFINITY,
+            inner_tol: LOCAL_TOL,
         }
     }
 }
@@ -116,27 +147,89 @@ impl TendonWorkspace {
     /// The joint Newton from the current (warm) point. `true` when it converged
     /// (the workspace then holds the row's solution); `false` when it handed back,
     /// with the row's starting point restored.
+    ///
+    /// When the row's first Newton step leaves the warm start's neighbourhood
+    /// (larger than [`MAX_STEP`]) or its line search fails, the row is retried by
+    /// continuation in the readings: the free lengths go from those of the starting
+    /// point to the row's in [`joint_substeps`] equal steps, each solved by the same
+    /// Newton from the last (the equilibrium path parametrised by the readings, so
+    /// every Newton step stays within [`MAX_STEP`]). Why: on the FTDCR v4 recording
+    /// (rows ~1 s apart) 6 rows of 200 step 170-340 in the scaled unknowns; handed
+    /// back, the nested method's checked solves cost them 30k-250k `f64` right-hand
+    /// sides each, half of all the work of the 200 rows, where 3-5 continuation steps
+    /// cost a few thousand. The nested method remains the fallback when a
+    /// continuation step fails too.
     pub(super) fn solve_joint(&mut self) -> bool {
-        let n = self.ws.unknowns();
         let p = self.driven.len();
         self.joint.x0.copy_from_slice(self.ws.unknowns_vector());
         self.joint.t0.copy_from_slice(&self.t);
         self.joint.x.copy_from_slice(&self.joint.x0);
-        let Some(mut merit) = self.joint_evaluate() else {
+        let first = match self.joint_newton(1.0) {
+            Ok(()) => return true,
+            Err(first) => first,
+        };
+        // continuation, when the first fresh step says how far the row is (from the
+        // free lengths of the starting point: the previous row's)
+        let Some(k_steps) = joint_substeps(first) else {
             return self.joint_hand_back();
+        };
+        let mut iterations = self.report.iterations;
+        self.joint.free_row.copy_from_slice(&self.free);
+        self.t.copy_from_slice(&self.joint.t0);
+        self.joint.x.copy_from_slice(&self.joint.x0);
+        for k in 1..=k_steps {
+            let s = k as f64 / k_steps as f64;
+            for i in 0..p {
+                let (a, b) = (self.joint.free_prev[i], self.joint.free_row[i]);
+                self.free[i] = a + s * (b - a);
+            }
+            let tol = if k == k_steps { 1.0 } else { SUBSTEP_MERIT };
+            let out = self.joint_newton(tol);
+            iterations += self.report.iterations;
+            if out.is_err() {
+                self.free.copy_from_slice(&self.joint.free_row);
+                return self.joint_hand_back();
+            }
+        }
+        self.report.iterations = iterations;
+        true
+    }
+
+    /// Newton iterations of the joint path from `(joint.x, t)` until the merit is at
+    /// most `merit_tol` (1: converged). `Err` with the largest component of the first
+    /// fresh Newton step in the scaled shooting unknowns (infinite when unknown)
+    /// when it stopped without converging; the iterate is then unspecified.
+    fn joint_newton(&mut self, merit_tol: f64) -> Result<(), f64> {
+        let n = self.ws.unknowns();
+        let p = self.driven.len();
+        let mut first_step = f64::INFINITY;
+        let Some(mut merit) = self.joint_evaluate() else {
+            return Err(first_step);
         };
         for it in 0..JOINT_MAX_ITERATIONS {
             self.report.iterations = it;
-            if merit <= 1.0 {
-                if self.zero_slack_tensions() {
+            if merit <= merit_tol {
+                if merit_tol <= 1.0 && self.joint.inner_tol > LOCAL_TOL {
+                    // the point was evaluated with loosely settled next holes: confirm
+                    // it with fully settled ones (what every reported point has)
+                    self.joint_inner_tolerance(0.0);
+                    match self.joint_evaluate() {
+                        Some(m) => merit = m,
+                        None => return Err(first_step),
+                    }
+                    if merit > merit_tol {
+                        continue;
+                    }
+                }
+                if merit_tol <= 1.0 && self.zero_slack_tensions() {
                     // a slack tendon carries exactly nothing (see the nested loop)
                     match self.joint_evaluate() {
                         Some(m) if m <= 1.0 => {}
-                        _ => return self.joint_hand_back(),
+                        _ => return Err(first_step),
                     }
                 }
                 self.report.status = SolveStatus::Converged;
-                return true;
+                return Ok(());
             }
             // a quasi-Newton step with the last Jacobian's inverse, Broyden-updated
             // since, when the active set is the same (a "chord" step below); a fresh
@@ -163,22 +256,28 @@ impl TendonWorkspace {
                     self.joint.x.copy_from_slice(&self.joint.xs);
                     self.t.copy_from_slice(&self.joint.ts);
                     if self.joint_evaluate().is_none() {
-                        return self.joint_hand_back();
+                        return Err(first_step);
                     }
                 }
                 if fresh && !self.joint_factor() {
-                    return self.joint_hand_back();
+                    return Err(first_step);
                 }
                 self.joint_step(n, p);
                 let dx_max = self.joint.dz[..n]
                     .iter()
                     .fold(0.0f64, |m, d| m.max(d.abs()));
+                if fresh && first_step.is_infinite() {
+                    first_step = dx_max;
+                }
                 if !dx_max.is_finite() || dx_max > MAX_STEP {
                     if fresh {
-                        return self.joint_hand_back();
+                        return Err(first_step);
                     }
                     continue;
                 }
+                // inexact inner solves while far away (as the shooting Newton does):
+                // the trial's next holes settle to 1e-10 of the iterate's residual
+                self.joint_inner_tolerance(merit);
                 let mut alpha = 1.0;
                 for _ in 0..if fresh { 8 } else { 1 } {
                     for i in 0..n {
@@ -193,7 +292,7 @@ impl TendonWorkspace {
                         } else {
                             CHORD_CONTRACTION * l2_before
                         };
-                        if self.joint.l2 < enough || m <= 1.0 {
+                        if self.joint.l2 < enough || m <= merit_tol {
                             accepted = Some(m);
                             break;
                         }
@@ -213,10 +312,20 @@ impl TendonWorkspace {
                     merit = m;
                     self.joint_broyden(n, p);
                 }
-                None => return self.joint_hand_back(),
+                None => return Err(first_step),
             }
         }
-        self.joint_hand_back()
+        Err(first_step)
+    }
+
+    /// Settle tolerance of the next passes from the merit of the current iterate
+    /// (0: fully settled, `LOCAL_TOL`): `1e-10` of its residual `merit * tol` as a
+    /// fraction of the rod length, the rule of the shooting Newton (the boundary
+    /// residual moves by ~100-1000 times a scaled hole error, so the inner error stays
+    /// 1e-7 of the outer residual; near convergence the clamp makes it `LOCAL_TOL`).
+    fn joint_inner_tolerance(&mut self, merit: f64) {
+        let tol = self.ws.report().tolerance;
+        self.joint.inner_tol = self.ws.set_local_tolerance(1e-10 * merit * tol);
     }
 
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
@@ -352,6 +461,7 @@ impl TendonWorkspace {
 
     /// Restore the row's starting point for the nested method; `false`.
     fn joint_hand_back(&mut self) -> bool {
+        self.joint_inner_tolerance(0.0);
         self.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);
         self.joint.lu_valid = false;
