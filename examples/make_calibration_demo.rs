@@ -62,6 +62,7 @@ fn main() {
                 t_s: Some(i as f64 * 0.5),
                 marker_m: Vector3::zeros(),
                 inputs: t.to_vec(),
+                history: None,
             };
             let pose = model.predict(&row).expect("truth solves");
             let base = pose.position + pose.rotation * offset;

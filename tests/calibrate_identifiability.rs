@@ -123,6 +123,7 @@ fn modulus_and_diameter_of_a_kirchhoff_rod_are_reported_with_their_direction() {
             t_s: None,
             marker_m: Vector3::zeros(),
             inputs: t.to_vec(),
+            history: None,
         };
         let p = truth_model.predict(&row).unwrap().position;
         let n = Vector3::new(rng.gauss(), rng.gauss(), rng.gauss()) * 1e-4;

@@ -23,6 +23,7 @@ fn rows(n: usize) -> Vec<RecordingRow> {
             t_s: None,
             marker_m: Vector3::zeros(),
             inputs: t.to_vec(),
+            history: None,
         })
         .collect()
 }

@@ -20,6 +20,7 @@
 //!
 //! Units: SI (m, N, kg, rad); a recording's mm columns are converted on reading.
 
+pub mod conditioning;
 mod fit;
 mod frame;
 mod identify;
@@ -35,6 +36,7 @@ mod run;
 mod spec;
 mod stats;
 
+pub use conditioning::{Conditioning, InputTimeline, ReadingsHistory, MAX_GAP_S};
 pub use fit::{
     CalibrationReport, CalibrationSettings, FailedRow, FitParam, FittedParam, FrameSetup, Progress,
     RowResult, Split, Stage,
@@ -55,7 +57,9 @@ pub use lm::{
 };
 pub use model::{finite_differences, CalibrationModel, RowFailure, Sensitivities, TensionModel};
 pub use readings_model::{ReadingsModel, SceneModel};
-pub use recording::{is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow};
+pub use recording::{
+    is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow, RowHistory,
+};
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
 pub use run::{calibrate, frame_param_names, CalibrationSetup};
 pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec};

@@ -3,7 +3,15 @@
 //! row after row (so friction's direction memory follows the recording), and the
 //! pose of the body the marker sits on is predicted. [`SceneModel`] chooses it or
 //! [`TensionModel`] from the scene.
+//!
+//! The scene's `[readings]` conditioning (time offset, backlash: see
+//! [`super::conditioning`]) is applied to the whole recording a row came from
+//! ([`super::RowHistory`]), so `readings/time_offset_s` and `readings/backlash_m`
+//! are calibration parameters like any scene value (sensitivities by the checked
+//! central differences of [`super::finite_differences`]: the tendon solve has no
+//! derivative with respect to the readings to chain through).
 
+use super::conditioning::{Conditioning, InputTimeline};
 use super::model::{marker_body_pose, patched_scene, CalibrationModel, TensionModel};
 use super::recording::RecordingRow;
 use super::CalibrationError;
@@ -11,6 +19,7 @@ use crate::files::Scene;
 use crate::statics::{Pose, Start};
 use crate::tendons::{Actuation, TendonWorkspace};
 use crate::validation::ParamPath;
+use std::sync::Arc;
 
 /// Servo readings -> tendon tensions and shape -> marker body pose.
 pub struct ReadingsModel {
@@ -25,6 +34,10 @@ pub struct ReadingsModel {
     ws: TendonWorkspace,
     q: Vec<f64>,
     cold: bool,
+    /// The scene's `[readings]` conditioning at the current values.
+    cond: Conditioning,
+    /// Conditioned readings (m) of every row of the last timeline used, row-major.
+    conditioned: Option<(Arc<InputTimeline>, Vec<f64>)>,
 }
 
 fn model_err(context: String) -> impl FnOnce(crate::ModelError) -> CalibrationError {
@@ -69,7 +82,38 @@ impl ReadingsModel {
             marker_s,
             ws,
             cold: true,
+            cond: Conditioning::from_spec(scene.readings.as_ref()),
+            conditioned: None,
         })
+    }
+
+    /// The conditioned readings (m) of `row` into `self.q`.
+    fn conditioned_readings(&mut self, row: &RecordingRow) -> Result<(), CalibrationError> {
+        if self.cond.is_identity() {
+            for (q, &c) in self.q.iter_mut().zip(&self.columns) {
+                *q = row.inputs[c] * self.scale;
+            }
+            return Ok(());
+        }
+        let h = row.history.as_ref().ok_or_else(|| {
+            CalibrationError::BadInput(format!(
+                "line {}: the scene's readings conditioning ({:?}) needs the row's recording \
+                 (a row read by `Recording::load`, not built by hand)",
+                row.line, self.cond
+            ))
+        })?;
+        let stale = !matches!(&self.conditioned, Some((t, _)) if Arc::ptr_eq(t, &h.timeline));
+        if stale {
+            let all = h
+                .timeline
+                .conditioned(&self.cond, &self.columns, self.scale)
+                .map_err(model_err(format!("line {}: readings", row.line)))?;
+            self.conditioned = Some((h.timeline.clone(), all));
+        }
+        let (_, all) = self.conditioned.as_ref().expect("set above");
+        let m = self.columns.len();
+        self.q.copy_from_slice(&all[h.index * m..(h.index + 1) * m]);
+        Ok(())
     }
 
     /// The reading columns of a scene's displacement-driven tendons (the default
@@ -107,6 +151,8 @@ impl Clone for ReadingsModel {
                 .expect("the scene this model was built from is valid"),
             q: self.q.clone(),
             cold: true,
+            cond: self.cond,
+            conditioned: None,
         };
         m.set_params(&self.values)
             .expect("values this model already accepted");
@@ -125,6 +171,8 @@ impl CalibrationModel for ReadingsModel {
             .map_err(model_err(format!("scene with {values:?}")))?;
         self.values = values.to_vec();
         self.cold = true;
+        self.cond = Conditioning::from_spec(scene.readings.as_ref());
+        self.conditioned = None;
         Ok(())
     }
 
@@ -133,9 +181,7 @@ impl CalibrationModel for ReadingsModel {
     }
 
     fn predict(&mut self, row: &RecordingRow) -> Result<Pose, CalibrationError> {
-        for (q, &c) in self.q.iter_mut().zip(&self.columns) {
-            *q = row.inputs[c] * self.scale;
-        }
+        self.conditioned_readings(row)?;
         let start = if self.cold { Start::Cold } else { Start::Warm };
         let rep = self
             .ws

@@ -4,12 +4,14 @@
 //! line, keys = column names). Every error names the file, the line (1-based) and
 //! the column.
 
+use super::conditioning::InputTimeline;
 use super::spec::{CalibrationSpec, LengthUnit};
 use super::CalibrationError;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Which columns of a recording are read, and how.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +62,28 @@ pub struct RecordingRow {
     pub marker_m: Vector3<f64>,
     /// Input values, ordered like [`Recording::input_names`] (units as named: N, kg).
     pub inputs: Vec<f64>,
+    /// The whole recording's inputs over time and this row's place in it (set when
+    /// a recording is read), for models that read inputs at a shifted time or
+    /// through a play ([`super::conditioning`]); a row taken out of its recording
+    /// keeps it. `None` for rows built by hand. Not serialized.
+    #[serde(skip)]
+    pub history: Option<RowHistory>,
+}
+
+/// Where a row sits in its recording's [`InputTimeline`].
+#[derive(Clone, Debug)]
+pub struct RowHistory {
+    /// The recording's inputs over time (shared by its rows).
+    pub timeline: Arc<InputTimeline>,
+    /// This row's index in it.
+    pub index: usize,
+}
+
+impl PartialEq for RowHistory {
+    /// Same timeline (by identity) and index.
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.timeline, &other.timeline) && self.index == other.index
+    }
 }
 
 /// A parsed recording.
@@ -214,6 +238,7 @@ impl Layout {
             t_s,
             marker_m: marker,
             inputs,
+            history: None,
         })
     }
 }
@@ -303,6 +328,20 @@ impl Recording {
         if rows.is_empty() {
             return Err(cell_err(file, 1, "-".into(), "no data rows".into()));
         }
+        let times: Option<Vec<f64>> = rows.iter().map(|r| r.t_s).collect();
+        let inputs: Vec<Vec<f64>> = rows.iter().map(|r| r.inputs.clone()).collect();
+        let time_column = layout
+            .time
+            .clone()
+            .or_else(|| map.time_column.clone())
+            .unwrap_or_else(|| "t_s".into());
+        let timeline = Arc::new(InputTimeline::new(file, time_column, times, &inputs));
+        for (index, r) in rows.iter_mut().enumerate() {
+            r.history = Some(RowHistory {
+                timeline: timeline.clone(),
+                index,
+            });
+        }
         Ok(Self {
             file: file.into(),
             input_names: layout.inputs,
@@ -332,6 +371,17 @@ impl Recording {
             .cloned()
             .collect();
         (inside, rest)
+    }
+}
+
+impl Recording {
+    /// Every `n`-th row (rows 0, n, 2n, ...; `n` >= 1), e.g. to fit on fewer rows.
+    /// The rows keep their place in the whole recording, so readings at shifted
+    /// times are still interpolated between neighbouring rows of the file.
+    pub fn every(&self, n: usize) -> Self {
+        let mut out = self.clone();
+        out.rows = self.rows.iter().step_by(n.max(1)).cloned().collect();
+        out
     }
 }
 

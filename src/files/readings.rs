@@ -37,6 +37,17 @@ pub struct ReadingsSpec {
     pub measured_tip: Option<[String; 3]>,
     /// Metres per unit of `measured_tip` (default 1).
     pub measured_scale_m: f64,
+    /// Time offset between the servo log and the measured tip (s, default 0): the
+    /// row stamped `t` is solved with the readings linearly interpolated at
+    /// `t - time_offset_s` (> 0: the capture lags the log), inside blocks of rows
+    /// at most 3 s apart, clamped at a block's ends; needs the time column. See
+    /// `calibrate::conditioning`. Calibration path `readings/time_offset_s`.
+    pub time_offset_s: f64,
+    /// Backlash between each servo and its tendon (m, >= 0, default 0): the tendon
+    /// follows the (time-shifted) reading with a play of this width (loading and
+    /// unloading differ by it). See `calibrate::conditioning`. Calibration path
+    /// `readings/backlash_m`.
+    pub backlash_m: f64,
 }
 
 impl Default for ReadingsSpec {
@@ -46,6 +57,8 @@ impl Default for ReadingsSpec {
             time_column: "t_s".into(),
             measured_tip: None,
             measured_scale_m: 1.0,
+            time_offset_s: 0.0,
+            backlash_m: 0.0,
         }
     }
 }
@@ -55,6 +68,8 @@ impl ReadingsSpec {
     pub fn validate(&self) -> Result<(), crate::ModelError> {
         crate::ModelError::positive("readings.scale_m", self.scale_m)?;
         crate::ModelError::positive("readings.measured_scale_m", self.measured_scale_m)?;
+        crate::ModelError::finite("readings.time_offset_s", self.time_offset_s)?;
+        crate::ModelError::non_negative("readings.backlash_m", self.backlash_m)?;
         Ok(())
     }
 }

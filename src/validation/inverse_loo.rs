@@ -242,6 +242,7 @@ pub fn table_4_5_loo(src: &DataSource) -> Result<Vec<LooRow>, ValidationError> {
             t_s: None,
             marker_m: Vector3::new(xs[i], ys[i], k * deltas[i]),
             inputs: vec![masses[i]],
+            history: None,
         })
         .collect();
     let settings = CalibrationSettings {

@@ -8,8 +8,18 @@
 //! [`super::hardware_benchmark`] when both chains converge every row on the same
 //! branch (they differ only in what follows a failed row: a cold restart there, the
 //! rolled-back last good row here).
+//!
+//! The scene's readings conditioning (`[readings] time_offset_s`, `backlash_m`:
+//! [`crate::calibrate::conditioning`]) is applied by the chain from a small
+//! per-stream state ([`ReadingsHistory`]): it follows every row whose readings were
+//! valid (converged or not, as the servos moved either way), and a row whose
+//! readings are rejected leaves it as it was. A negative time offset (readings
+//! from the future) is clamped to the newest row in a stream, so `track` and the
+//! offline calibration agree for offsets >= 0.
 
-use crate::calibrate::{CalibrationError, CalibrationSpec, RigidTransform, TipErrors};
+use crate::calibrate::{
+    CalibrationError, CalibrationSpec, Conditioning, ReadingsHistory, RigidTransform, TipErrors,
+};
 use crate::error::ModelError;
 use crate::files::Scene;
 use crate::tendons::{TendonReport, TendonWorkspace};
@@ -25,6 +35,12 @@ pub struct TrackChain {
     good: Option<TendonWorkspace>,
     /// The last row did not converge: roll back to `good` before the next row.
     restore: bool,
+    /// Time offset and backlash state of the stream.
+    history: ReadingsHistory,
+    /// Its state before the row being stepped (restored when the row is rejected).
+    saved: ReadingsHistory,
+    /// Name of the time column, for errors.
+    time_column: String,
 }
 
 /// One row of a [`TrackChain`].
@@ -38,13 +54,28 @@ pub struct ChainStep {
 }
 
 impl TrackChain {
-    /// A chain on `ws` (warm from its reference solve).
+    /// A chain on `ws` (warm from its reference solve), readings unconditioned.
     pub fn new(ws: TendonWorkspace) -> Self {
+        let history = ReadingsHistory::new(Conditioning::default());
         Self {
             ws,
             good: None,
             restore: false,
+            saved: history.clone(),
+            history,
+            time_column: "t_s".into(),
         }
+    }
+    /// The chain of `scene` on `ws`: with the scene's `[readings]` conditioning.
+    pub fn for_scene(scene: &Scene, ws: TendonWorkspace) -> Self {
+        let mut chain = Self::new(ws);
+        chain.history = ReadingsHistory::new(Conditioning::from_spec(scene.readings.as_ref()));
+        chain.saved = chain.history.clone();
+        chain.time_column = scene
+            .readings
+            .as_ref()
+            .map_or_else(|| "t_s".into(), |r| r.time_column.clone());
+        chain
     }
     /// The workspace (the state of the last row solved).
     pub fn workspace(&self) -> &TendonWorkspace {
@@ -61,6 +92,33 @@ impl TrackChain {
     /// stream without it. Invalid
     /// readings are an error and leave the chain as it was.
     pub fn step(&mut self, readings_m: &[f64]) -> Result<ChainStep, ModelError> {
+        self.step_at(None, readings_m)
+    }
+
+    /// [`TrackChain::step`] of a row stamped `t_s` (s; needed with a time offset):
+    /// the readings are conditioned first (time offset, backlash). A rejected row
+    /// (an error) leaves the conditioning state as it was too.
+    pub fn step_at(
+        &mut self,
+        t_s: Option<f64>,
+        readings_m: &[f64],
+    ) -> Result<ChainStep, ModelError> {
+        self.saved.clone_from(&self.history);
+        let q = match self.history.push(t_s, readings_m, &self.time_column) {
+            Ok(q) => q.to_vec(),
+            Err(e) => {
+                self.history.clone_from(&self.saved);
+                return Err(e);
+            }
+        };
+        let step = self.solve(&q);
+        if step.is_err() {
+            self.history.clone_from(&self.saved);
+        }
+        step
+    }
+
+    fn solve(&mut self, readings_m: &[f64]) -> Result<ChainStep, ModelError> {
         if self.restore {
             if let Some(g) = &self.good {
                 self.ws.clone_from(g);
@@ -125,7 +183,7 @@ pub fn track_errors(
             source,
         })?;
     let mut parser = scene.readings_parser(&ws);
-    let mut chain = TrackChain::new(ws);
+    let mut chain = TrackChain::for_scene(scene, ws);
     let (mut model, mut measured) = (Vec::new(), Vec::new());
     let (mut rows, mut not_converged, mut bad_rows, mut time) = (0, 0, Vec::new(), 0.0);
     for (i, line) in text.lines().enumerate() {
@@ -138,12 +196,13 @@ pub fn track_errors(
             }
         };
         let t0 = std::time::Instant::now();
-        let step = chain
-            .step(&row.readings_m)
-            .map_err(|source| CalibrationError::Model {
-                context: format!("{file} line {}: readings", row.line),
-                source,
-            })?;
+        let step =
+            chain
+                .step_at(row.t_s, &row.readings_m)
+                .map_err(|source| CalibrationError::Model {
+                    context: format!("{file} line {}: readings", row.line),
+                    source,
+                })?;
         time += t0.elapsed().as_secs_f64();
         rows += 1;
         not_converged += usize::from(!step.report.status.is_converged());

@@ -152,6 +152,7 @@ pub fn synthesise(
             t_s: Some(i as f64 * 0.1),
             marker_m: Vector3::zeros(),
             inputs: t.to_vec(),
+            history: None,
         };
         let pose = m.predict(&row).unwrap();
         let base = pose.position + pose.rotation * truth.offset;

@@ -49,6 +49,11 @@ pub struct Args {
     /// other rows of `--data` are the validation set (when no `--val` is given).
     #[arg(long)]
     train_rows: Option<String>,
+    /// Recording mode: fit every N-th row of the training rows (after --train-rows);
+    /// readings at shifted times (`readings/time_offset_s`) are still interpolated
+    /// between neighbouring rows of the whole file.
+    #[arg(long, default_value_t = 1)]
+    every: usize,
     /// Parameter path into the scene, e.g. `robot/sections/*/youngs_modulus_pa`
     /// (`*` = every element gets the same value), optionally with bounds
     /// `PATH:MIN:MAX`; repeatable. Recording mode: added to the scene's
@@ -341,6 +346,12 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
         }
         (None, None) => (all, None),
         (Some(_), Some(_)) => anyhow::bail!("give --val or --train-rows, not both"),
+    };
+    anyhow::ensure!(a.every >= 1, "--every must be >= 1");
+    let train = if a.every > 1 {
+        train.every(a.every)
+    } else {
+        train
     };
     let paths: Vec<ParamPath> = spec
         .params

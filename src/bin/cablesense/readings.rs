@@ -101,7 +101,7 @@ pub fn stream(
         .with_context(|| format!("{}: building the tendon model", scene_path.display()))?;
     let mut parser: ReadingsParser = scene.readings_parser(&ws);
     // warm row to row; a row that does not converge is not the next row's warm start
-    let mut chain = cablesense::validation::TrackChain::new(ws);
+    let mut chain = cablesense::validation::TrackChain::for_scene(scene, ws);
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     if output == Output::Text {
@@ -138,7 +138,7 @@ pub fn stream(
             }
         };
         let t0 = std::time::Instant::now();
-        let (rep, fallback) = match chain.step(&row.readings_m) {
+        let (rep, fallback) = match chain.step_at(row.t_s, &row.readings_m) {
             Ok(s) => (s.report, s.fallback),
             Err(e) => {
                 bad += 1;

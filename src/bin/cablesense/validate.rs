@@ -463,7 +463,7 @@ fn print_hardware(svg: Option<&Path>) -> anyhow::Result<bool> {
         p.train_rmse_m / p.robot_length_m * 100.0
     );
     println!(
-        "  (train rows here are the 324 rows the calibration fitted, so in-sample; the published train figure is over all 1620)"
+        "  (train rows here are every 5th of the 1620 rows the calibration fitted, so in-sample; the published train figure is over all 1620)"
     );
     let stored = b.stored.val.mean_removed.rmse_m;
     println!(
