@@ -1,6 +1,8 @@
 //! Replays every committed fuzz input through the fuzz targets' own checks
-//! (`fuzz/fuzz_targets/shared.rs`, `shared_stream.rs`, `shared_estimate.rs`): the seed
-//! corpora in `fuzz/seeds/<target>/` and the minimized crashers in
+//! (`fuzz/fuzz_targets/shared*.rs`: `shared.rs`, `shared_stream.rs`,
+//! `shared_estimate.rs`, `shared_readings.rs`, `shared_load_cells.rs`,
+//! `shared_recording.rs`, `shared_capi.rs`): the seed corpora in
+//! `fuzz/seeds/<target>/` and the minimized crashers in
 //! `fuzz/regressions/<target>/` (rust-lang/regex style).
 //! A failure names the file; reproduce it with
 //! `cargo fuzz run --sanitizer none <target> fuzz/regressions/<target>/<file>`.
@@ -13,6 +15,8 @@ mod shared_estimate;
 mod shared_load_cells;
 #[path = "../fuzz/fuzz_targets/shared_readings.rs"]
 mod shared_readings;
+#[path = "../fuzz/fuzz_targets/shared_recording.rs"]
+mod shared_recording;
 #[path = "../fuzz/fuzz_targets/shared_stream.rs"]
 mod shared_stream;
 
@@ -94,4 +98,9 @@ fn readings_stream_inputs() {
 #[test]
 fn load_cells_stream_inputs() {
     replay("load_cells_stream", shared_load_cells::check_load_cells, 2);
+}
+
+#[test]
+fn recording_inputs() {
+    replay("recording", shared_recording::check_recording, 6);
 }

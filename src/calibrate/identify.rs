@@ -375,7 +375,8 @@ pub struct ServoRows {
     pub lines: Vec<usize>,
     /// Labels of the patterns pulling it.
     pub labels: Vec<String>,
-    /// Median reading of the other (slack) servos over these rows (m).
+    /// Median reading of the other (slack) servos over these rows (m; 0 when the
+    /// recording has no other servo).
     pub slack_m: f64,
 }
 
@@ -471,7 +472,9 @@ pub fn servo_rows(
             });
         }
         slack[s].sort_by(f64::total_cmp);
-        o.slack_m = slack[s][slack[s].len() / 2];
+        // a recording with one servo has no other (slack) servo to take the level
+        // from (it indexed an empty list here): level 0, the rest reading
+        o.slack_m = slack[s].get(slack[s].len() / 2).copied().unwrap_or(0.0);
     }
     Ok(out)
 }
