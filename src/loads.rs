@@ -67,7 +67,9 @@ impl Loads {
     pub fn tension(&self, j: usize) -> f64 {
         self.tensions_n.get(j).copied().unwrap_or(0.0)
     }
-    /// Check the loads against the robot they act on.
+    /// Check the loads against the robot they act on. Allocation-free when every check
+    /// passes (field paths are formatted only for the error), so hot paths (warm
+    /// solves, the curvature rungs' ticks) call it on every load update.
     pub fn validate(&self, robot: &Robot) -> Result<(), ModelError> {
         ModelError::finite3("loads.gravity_m_s2", &self.gravity_m_s2)?;
         for (i, p) in self.point.iter().enumerate() {

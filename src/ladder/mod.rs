@@ -426,26 +426,6 @@ pub fn reject_continuous(robot: &Robot) -> Result<(), LadderError> {
     }
 }
 
-/// Validate `loads` against `robot` cheaply on the hot path: the allocating
-/// [`Loads::validate`] (with its field paths) runs only when a quick check fails.
-pub(crate) fn check_loads(robot: &Robot, loads: &Loads) -> Result<(), LadderError> {
-    let ok = loads.gravity_m_s2.iter().all(|g| g.is_finite())
-        && loads.tensions_n.len() <= robot.cables().len()
-        && loads.tensions_n.iter().all(|t| t.is_finite() && *t >= 0.0)
-        && loads.point.iter().all(|p| {
-            p.section < robot.sections().len()
-                && p.force_n.iter().chain(&p.torque_nm).all(|x| x.is_finite())
-                && p.mass_kg.is_finite()
-                && p.mass_kg >= 0.0
-        });
-    if ok {
-        Ok(())
-    } else {
-        loads.validate(robot)?;
-        Ok(())
-    }
-}
-
 /// `loads` with point loads (forces, torques, payload masses) and cable tensions
 /// multiplied by `factor`; gravity is left alone (it does not vary in service).
 pub fn scale_loads(loads: &Loads, factor: f64) -> Loads {

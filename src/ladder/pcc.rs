@@ -43,7 +43,7 @@ use super::anderson::{Anderson, MAX_DEPTH};
 use super::arc::PoseT;
 use super::kinematics::TendonKinematics;
 use super::sens::{seed_theta, seed_u, Implicit, LoadsT, D6, W};
-use super::{add_params, check_loads, ForwardModel, LadderError, LadderOutput, LadderReport};
+use super::{add_params, ForwardModel, LadderError, LadderOutput, LadderReport};
 use crate::cables::path_length;
 use crate::loads::Loads;
 use crate::math::Real;
@@ -331,7 +331,8 @@ impl PiecewiseConstantCurvature {
         theta: &[f64],
         start: Start,
     ) -> Result<LadderReport, LadderError> {
-        check_loads(&self.layout.robot, loads)?;
+        // allocation-free unless a check fails (`Loads::validate`)
+        loads.validate(&self.layout.robot)?;
         self.b.loads.set(loads);
         add_params(&mut self.b.loads, params, theta)?;
         Ok(self.run(start))
@@ -425,7 +426,8 @@ impl PiecewiseConstantCurvature {
 
 impl ForwardModel for PiecewiseConstantCurvature {
     fn solve(&mut self, loads: &Loads, start: Start) -> Result<LadderReport, LadderError> {
-        check_loads(&self.layout.robot, loads)?;
+        // allocation-free unless a check fails (`Loads::validate`)
+        loads.validate(&self.layout.robot)?;
         self.b.loads.set(loads);
         Ok(self.run(start))
     }
