@@ -224,10 +224,16 @@ impl Plan {
                 }
                 GuideMass::None | GuideMass::Point => {}
             }
+            // RK4 steps of the interval: its share of the section's steps, rounded up.
+            // The share is computed in floating point, so an interval that is exactly
+            // `1/steps` of its section (a disk gap when `steps` equals the disks per
+            // section) can come out as 1 + 4e-16 and would get two steps: a relative
+            // slack of 1e-9 keeps such a share at one step.
             let n = if adaptive {
                 1
             } else {
-                ((steps as f64) * (s1 - s0) / sec.length).ceil().max(1.0) as usize
+                let share = (steps as f64) * (s1 - s0) / sec.length;
+                (share * (1.0 - 1e-9)).ceil().max(1.0) as usize
             };
             intervals.push(Interval {
                 s0,
