@@ -52,6 +52,10 @@ const CHORD_CONTRACTION: f64 = 0.5;
 const SUBSTEP_SIZE: f64 = 0.5 * MAX_STEP;
 /// Most continuation steps of one row (a row further away goes to the nested method).
 const MAX_SUBSTEPS: usize = 16;
+/// Continuation steps (accepted or failed) of one row before it hands back.
+const MAX_SUBSTEP_ATTEMPTS: usize = 10;
+/// Smallest continuation step, as a fraction of the row's change of readings.
+const MIN_SUBSTEP: f64 = 1.0 / 16.0;
 /// Merit at which an intermediate continuation step is done (in units of the
 /// tolerances, like the merit): it only has to start the next one within Newton's
 /// reach, which a residual of 1e4 tolerances (~1e-6 in the scaled unknowns) does.
@@ -75,6 +79,9 @@ pub(super) struct JointBufs {
     xs: Vec<f64>,
     ts: Vec<f64>,
     x: Vec<f64>,
+    /// The last converged continuation step's point (shooting unknowns, tensions).
+    x_ok: Vec<f64>,
+    t_ok: Vec<f64>,
     /// `d r / d[x; theta]` (`n x (n + np)`) and `d l / d[x; theta]` (`c x (n + np)`).
     jac_s: Vec<f64>,
     jac_m: Vec<f64>,
@@ -121,6 +128,8 @@ impl JointBufs {
             xs: vec![0.0; n],
             ts: vec![0.0; p],
             x: vec![0.0; n],
+            x_ok: vec![0.0; n],
+            t_ok: vec![0.0; p],
             jac_s: vec![0.0; n * (n + np)],
             jac_m: vec![0.0; cables * (n + np)],
             dz: vec![0.0; n + p],
@@ -177,19 +186,42 @@ impl TendonWorkspace {
         self.joint.free_row.copy_from_slice(&self.free);
         self.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);
-        for k in 1..=k_steps {
-            let s = k as f64 / k_steps as f64;
+        self.joint.x_ok.copy_from_slice(&self.joint.x0);
+        self.joint.t_ok.copy_from_slice(&self.joint.t0);
+        // adaptive steps in the readings: a failed step is retried at half the size
+        // from the last converged one. Why: on the FTDCR v4 val rows that handed back
+        // to the nested method, the failure is a tendon going slack within a step
+        // (the line search stalls at the kink of the NCP function), and a shorter
+        // step crosses the switch with Newton's active-set change instead
+        let (mut done, mut ds) = (0.0f64, 1.0 / k_steps as f64);
+        let mut attempts = 0;
+        while done < 1.0 {
+            let s = if done + ds > 1.0 - 1e-12 {
+                1.0
+            } else {
+                done + ds
+            };
             for i in 0..p {
                 let (a, b) = (self.joint.free_prev[i], self.joint.free_row[i]);
                 self.free[i] = a + s * (b - a);
             }
-            let tol = if k == k_steps { 1.0 } else { SUBSTEP_MERIT };
+            let tol = if s == 1.0 { 1.0 } else { SUBSTEP_MERIT };
             let out = self.joint_newton(tol);
             iterations += self.report.iterations;
-            if out.is_err() {
+            attempts += 1;
+            if out.is_ok() {
+                done = s;
+                self.joint.x_ok.copy_from_slice(&self.joint.x);
+                self.joint.t_ok.copy_from_slice(&self.t);
+                continue;
+            }
+            ds *= 0.5;
+            if attempts >= MAX_SUBSTEP_ATTEMPTS || ds < MIN_SUBSTEP {
                 self.free.copy_from_slice(&self.joint.free_row);
                 return self.joint_hand_back();
             }
+            self.joint.x.copy_from_slice(&self.joint.x_ok);
+            self.t.copy_from_slice(&self.joint.t_ok);
         }
         self.report.iterations = iterations;
         true
@@ -325,7 +357,7 @@ impl TendonWorkspace {
     /// 1e-7 of the outer residual; near convergence the clamp makes it `LOCAL_TOL`).
     fn joint_inner_tolerance(&mut self, merit: f64) {
         let tol = self.ws.report().tolerance;
-        self.joint.inner_tol = self.ws.set_local_tolerance(1e-10 * merit * tol);
+        self.joint.inner_tol = self.ws.set_local_tolerance(1e-8 * merit * tol);
     }
 
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
@@ -359,15 +391,22 @@ impl TendonWorkspace {
 
     /// Exact generalized Jacobian at the current point, factorised.
     fn joint_factor(&mut self) -> bool {
-        let n = self.ws.unknowns();
-        let p = self.driven.len();
-        let np = self.theta.len();
-        let w = n + np;
         let jb = &mut self.joint;
         if !self.ws.joint_jacobians(&jb.x, &mut jb.jac_s, &mut jb.jac_m) {
             jb.lu_valid = false;
             return false;
         }
+        jb.lu_taut.copy_from_slice(&self.taut);
+        self.joint_assemble()
+    }
+
+    /// Assemble and factorise the generalized Jacobian from the last sweep's
+    /// `jac_s`, `jac_m` with the active set `joint.lu_taut`.
+    fn joint_assemble(&mut self) -> bool {
+        let n = self.ws.unknowns();
+        let p = self.driven.len();
+        let w = n + self.theta.len();
+        let jb = &mut self.joint;
         let m = n + p;
         let a = jb.lu.matrix_mut();
         for r in 0..n {
@@ -378,7 +417,7 @@ impl TendonWorkspace {
             let row = &mut a[(n + i) * m..(n + i + 1) * m];
             let mech = &self.mech[i];
             let c = mech.compliance(self.free[i], self.mean_factor[i]);
-            if self.taut[i] {
+            if jb.lu_taut[i] {
                 let j = self.driven[i];
                 for (col, v) in row[..n].iter_mut().enumerate() {
                     *v = -jb.jac_m[j * w + col];
@@ -392,7 +431,6 @@ impl TendonWorkspace {
             }
         }
         jb.lu_valid = matches!(jb.lu.factor(), Some(rc) if rc > 1e-14);
-        jb.lu_taut.copy_from_slice(&self.taut);
         if jb.lu_valid {
             // explicit inverse (m solves; m = n + p is ~15, far below a pass's cost)
             jb.h.fill(0.0);
