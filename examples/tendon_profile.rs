@@ -1,0 +1,88 @@
+//! Per-row work of the warm tendon solve on the FTDCR v4 val recording: `f64` and
+//! dual right-hand sides, joint iterations, time. For profiling (issue 9's speed).
+//!
+//! `cargo run --release --example tendon_profile [SCENE] [READINGS] [REPEAT]`
+use cablesense::Scene;
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let scene_path = args.get(1).map_or("data/scenes/ftdcr_v4.toml", |s| s);
+    let data = args.get(2).map_or("data/hardware/ftdcr_v4/val.csv", |s| s);
+    let repeat: usize = args.get(3).map_or(Ok(1), |s| s.parse())?;
+    let verbose = std::env::var_os("VERBOSE").is_some();
+    let scene = Scene::load(scene_path)?;
+    let mut ws = scene.tendon_workspace()?;
+    let mut parser = scene.readings_parser(&ws);
+    let text = std::fs::read_to_string(data)?;
+    let rows: Vec<_> = text
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| parser.line(i + 1, l).ok().flatten())
+        .collect();
+    let (mut f_all, mut d_all, mut t_all) = (0u64, 0u64, 0.0);
+    let mut per_row = Vec::new();
+    let mut bad = 0;
+    let mut tips = std::env::var_os("TIPS")
+        .map(std::fs::File::create)
+        .transpose()?;
+    for _ in 0..repeat {
+        for row in &rows {
+            let c0 = ws.workspace().rhs_counts();
+            let t = Instant::now();
+            let rep = ws.solve_readings(&row.readings_m)?;
+            let dt = t.elapsed().as_secs_f64();
+            let c1 = ws.workspace().rhs_counts();
+            let (f, d) = (c1.f64_rhs - c0.f64_rhs, c1.dual_rhs - c0.dual_rhs);
+            let li = c1.local_iterations - c0.local_iterations;
+            bad += usize::from(!rep.status.is_converged());
+            if let Some(w) = tips.as_mut() {
+                use std::io::Write;
+                let t = ws.tip_position();
+                writeln!(
+                    w,
+                    "{} {:.17e} {:.17e} {:.17e} {:?} {:?}",
+                    row.line,
+                    t.x,
+                    t.y,
+                    t.z,
+                    ws.taut(),
+                    rep.status
+                )?;
+            }
+            if verbose {
+                println!(
+                    "line {:4} {:?} it {} fw {} slack {} f64 {} dual {} local {} {:.0} us",
+                    row.line,
+                    rep.status,
+                    rep.iterations,
+                    rep.forward_solves,
+                    rep.slack,
+                    f,
+                    d,
+                    li,
+                    dt * 1e6
+                );
+            }
+            f_all += f;
+            d_all += d;
+            t_all += dt;
+            per_row.push((dt, f, d));
+        }
+    }
+    let n = per_row.len();
+    let mut times: Vec<f64> = per_row.iter().map(|r| r.0).collect();
+    times.sort_by(f64::total_cmp);
+    let mut f: Vec<u64> = per_row.iter().map(|r| r.1).collect();
+    f.sort();
+    println!(
+        "{n} rows ({bad} not converged): mean {:.0} us, median {:.0} us, p95 {:.0} us; f64 RHS mean {:.0} median {}, dual RHS mean {:.1}",
+        t_all / n as f64 * 1e6,
+        times[n / 2] * 1e6,
+        times[n * 95 / 100] * 1e6,
+        f_all as f64 / n as f64,
+        f[n / 2],
+        d_all as f64 / n as f64
+    );
+    Ok(())
+}
