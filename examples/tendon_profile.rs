@@ -11,6 +11,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let data = args.get(2).map_or("data/hardware/ftdcr_v4/val.csv", |s| s);
     let repeat: usize = args.get(3).map_or(Ok(1), |s| s.parse())?;
     let verbose = std::env::var_os("VERBOSE").is_some();
+    // COLD=1: every row from a cold start (the `tendon_readings_cold` bench case)
+    let cold = std::env::var_os("COLD").is_some();
     let scene = Scene::load(scene_path)?;
     let mut ws = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&ws);
@@ -30,7 +32,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for row in &rows {
             let c0 = ws.workspace().rhs_counts();
             let t = Instant::now();
-            let rep = ws.solve_readings(&row.readings_m)?;
+            let rep = if cold {
+                ws.solve_readings_from(&row.readings_m, cablesense::Start::Cold)?
+            } else {
+                ws.solve_readings(&row.readings_m)?
+            };
             let dt = t.elapsed().as_secs_f64();
             let c1 = ws.workspace().rhs_counts();
             let (f, d) = (c1.f64_rhs - c0.f64_rhs, c1.dual_rhs - c0.dual_rhs);

@@ -124,6 +124,9 @@ pub struct TendonWorkspace {
     factors: Vec<Vec<f64>>,
     mean_factor: Vec<f64>,
     has_solution: bool,
+    /// Scaled shooting unknowns of the reference equilibrium (zero readings, the
+    /// pretensions): where a cold solve's joint path starts.
+    x_ref: Vec<f64>,
     settings: TendonSettings,
     report: TendonReport,
     joint: joint::JointBufs,
@@ -232,6 +235,7 @@ impl TendonWorkspace {
             factors: driven.iter().map(|&j| vec![1.0; routes[j]]).collect(),
             mean_factor: vec![1.0; p],
             has_solution: false,
+            x_ref: Vec::new(),
             settings: TendonSettings::default(),
             report: TendonReport {
                 status: SolveStatus::NonFinite,
@@ -276,6 +280,8 @@ impl TendonWorkspace {
         }
         // the reference is the point of zero readings
         self.free.copy_from_slice(&self.free0);
+        self.x_ref.clear();
+        self.x_ref.extend_from_slice(self.ws.unknowns_vector());
         self.has_solution = true;
         Ok(())
     }
@@ -424,6 +430,22 @@ impl TendonWorkspace {
             && self.refresh_factors()
         {
             return Ok(self.finish());
+        }
+        // a cold start takes the same path from the reference equilibrium (zero
+        // readings, the pretensions: solved once at construction, so the start does
+        // not depend on earlier rows), continued in the readings by `solve_joint`'s
+        // adaptive steps; when that hands back, the nested method's cold solve from
+        // the straight rod follows. Why: on the FTDCR v4 val rows the nested cold
+        // solve costs ~1e5 `f64` right-hand sides a row (its shooting continuation
+        // and branch checks at every tension iterate), the path from the reference
+        // a few thousand.
+        if start == Start::Cold && self.settings.joint_newton && !self.x_ref.is_empty() {
+            self.joint.free_prev.copy_from_slice(&self.free0);
+            self.ws.adopt_unknowns(&self.x_ref, false);
+            self.joint.forget_jacobian();
+            if self.solve_joint() && self.refresh_factors() {
+                return Ok(self.finish());
+            }
         }
         self.report.status = SolveStatus::MaxIterations;
         // the point T: shooting solve, factors, lengths, sensitivities, residual

@@ -121,6 +121,13 @@ pub(super) struct JointBufs {
 }
 
 impl JointBufs {
+    /// Drop the reused Jacobian (a cold start must not depend on earlier rows).
+    pub(super) fn forget_jacobian(&mut self) {
+        self.lu_valid = false;
+        self.first_chord_ok = true;
+        self.rows_fresh = 0;
+    }
+
     pub(super) fn new(n: usize, p: usize, np: usize, cables: usize) -> Self {
         Self {
             x0: vec![0.0; n],
