@@ -6,8 +6,9 @@
 //! * `tendon_readings_warm`: `TendonWorkspace::solve_readings` over the recording's
 //!   rows in order, each warm-started from the previous row (the control-loop case).
 //!   One iteration = one row. Issue target: <= 100 us.
-//! * `tendon_readings_cold`: one row solved from the straight rod and the
-//!   pretensions (`Start::Cold`). Issue target: <= 2 ms.
+//! * `tendon_readings_cold`: one row solved with `Start::Cold` (the joint path from
+//!   the reference equilibrium at zero readings and the pretensions, else the nested
+//!   method from the straight rod). Issue target: <= 2 ms.
 //! * `tendon_track_row`: a warm row plus its JSON record (what `track` does per row,
 //!   without the write). Issue target: <= 150 us.
 //!
