@@ -118,7 +118,7 @@ pub struct RowFailure {
 }
 
 impl Sensitivities {
-    fn resize(&mut self, rows: usize, params: usize) {
+    pub(super) fn resize(&mut self, rows: usize, params: usize) {
         self.failed.clear();
         self.params = params;
         self.poses.resize(rows, identity_pose());
