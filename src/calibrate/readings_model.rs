@@ -22,6 +22,7 @@ use crate::statics::{Pose, Start};
 use crate::tendons::{Actuation, TendonWorkspace};
 use crate::validation::ParamPath;
 use std::collections::HashMap;
+use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
 
 // Exact (implicit-function) sensitivities of the rows' poses to the parameters.
@@ -243,7 +244,18 @@ impl CalibrationModel for ReadingsModel {
         rows: &[RecordingRow],
         out: &mut Sensitivities,
     ) -> Result<(), CalibrationError> {
-        self.exact_sensitivities(values, steps, rows, out)
+        self.exact_sensitivities(values, steps, rows, out, None)
+    }
+
+    fn sensitivities_counting(
+        &mut self,
+        values: &[f64],
+        steps: &[f64],
+        rows: &[RecordingRow],
+        out: &mut Sensitivities,
+        done: &AtomicUsize,
+    ) -> Result<(), CalibrationError> {
+        self.exact_sensitivities(values, steps, rows, out, Some(done))
     }
 }
 
@@ -328,6 +340,19 @@ impl CalibrationModel for SceneModel {
         match self {
             Self::Tension(m) => m.sensitivities(values, steps, rows, out),
             Self::Readings(m) => m.sensitivities(values, steps, rows, out),
+        }
+    }
+    fn sensitivities_counting(
+        &mut self,
+        values: &[f64],
+        steps: &[f64],
+        rows: &[RecordingRow],
+        out: &mut Sensitivities,
+        done: &AtomicUsize,
+    ) -> Result<(), CalibrationError> {
+        match self {
+            Self::Tension(m) => m.sensitivities_counting(values, steps, rows, out, done),
+            Self::Readings(m) => m.sensitivities_counting(values, steps, rows, out, done),
         }
     }
 }

@@ -50,6 +50,7 @@ use crate::calibrate::CalibrationError;
 use crate::math::DenseLu;
 use crate::statics::Pose;
 use crate::tendons::{TendonMechanics, TendonWorkspace};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
 /// A converged row: its conditioned readings (m), shooting unknowns, tensions (N),
@@ -133,9 +134,17 @@ impl ReadingsModel {
         steps: &[f64],
         rows: &[RecordingRow],
         out: &mut Sensitivities,
+        done: Option<&AtomicUsize>,
     ) -> Result<(), CalibrationError> {
+        let count_all = |done: Option<&AtomicUsize>, k: usize| {
+            if let Some(d) = done {
+                d.fetch_add(k, Ordering::Relaxed);
+            }
+        };
         if self.ws.workspace().robot().friction_mu() > 0.0 {
-            return finite_differences(self, values, steps, rows, out);
+            finite_differences(self, values, steps, rows, out)?;
+            count_all(done, rows.len());
+            return Ok(());
         }
         self.set_params(values)?;
         let n = values.len();
@@ -161,9 +170,16 @@ impl ReadingsModel {
                 }
             }
         }
-        if !self.exact_rows(values, steps, rows, &failed, out)? {
+        let mut counted = 0;
+        if !self.exact_rows(values, steps, rows, &failed, out, (done, &mut counted))? {
+            // (the fallback redoes the rows counted so far)
+            if let Some(d) = done {
+                d.fetch_sub(counted, Ordering::Relaxed);
+            }
             self.restart();
-            return finite_differences(self, values, steps, rows, out);
+            finite_differences(self, values, steps, rows, out)?;
+            count_all(done, rows.len());
+            return Ok(());
         }
         for (i, _) in &failed {
             out.poses[*i] = identity_pose();
@@ -183,6 +199,7 @@ impl ReadingsModel {
         rows: &[RecordingRow],
         failed: &[(usize, super::super::RowFailure)],
         out: &mut Sensitivities,
+        (done, counted): (Option<&AtomicUsize>, &mut usize),
     ) -> Result<bool, CalibrationError> {
         let n = values.len();
         // the two sides of each parameter
@@ -232,6 +249,10 @@ impl ReadingsModel {
         let mut worst = vec![(0.0f64, 0.0f64); n];
         self.ws.workspace_mut().set_local_tolerance(0.0);
         for (i, row) in rows.iter().enumerate() {
+            if let Some(d) = done {
+                d.fetch_add(1, Ordering::Relaxed);
+                *counted += 1;
+            }
             if failed.iter().any(|(j, _)| *j == i) {
                 continue;
             }
