@@ -21,10 +21,11 @@
 //! perturbed scene evaluated at `z`, or only `G` with the perturbed readings for a
 //! `readings/...` parameter, whose conditioning changes `q` and nothing else); the
 //! pose's total derivative is a central difference along the tangent
-//! `(dz/dp_k, e_k)`, two more passes. Per row and parameter that is 4 passes (2 for a
-//! readings parameter) and one sweep per row, against the two full solves of a
-//! central difference of the poses ([`super::super::finite_differences`], each a
-//! warm solve of 5-9 Newton iterations). Step `h` is the finite-difference step the
+//! `(dz/dp_k, e_k)`, two more passes (`Workspace::solution` at the two points). Per
+//! row and parameter that is 4 passes (2 for a readings parameter), and one sweep
+//! per row, against the two full solves of a central difference of the poses
+//! ([`super::super::finite_differences`], each a warm solve of 5-9 Newton
+//! iterations). Step `h` is the finite-difference step the
 //! calibration gives (`fd_step` times the parameter's scale); the differences are of
 //! smooth functions at fixed `z` (truncation `h^2`), not of converged solves, so the
 //! solver tolerance does not enter them.
@@ -349,10 +350,13 @@ impl ReadingsModel {
                     }
                     .workspace_mut();
                     sw.set_theta(&ts);
-                    if !sw.adopt_unknowns(&xs, true).is_finite() {
+                    // (no pass here: `solution` runs its own at the adopted point)
+                    sw.adopt_unknowns(&xs, false);
+                    let sol = sw.solution();
+                    if !sol.tip().position.iter().all(|v| v.is_finite()) {
                         return Ok(false);
                     }
-                    poses[s] = marker_body_pose(&sw.solution(), self.marker_s);
+                    poses[s] = marker_body_pose(&sol, self.marker_s);
                 }
                 out.d_position[i * n + k] = (poses[0].position - poses[1].position) / (2.0 * h);
                 out.d_rotation[i * n + k] =
