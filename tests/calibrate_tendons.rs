@@ -6,10 +6,13 @@
 //! truth, and the train error at the noise level (RMS of 3-D distances below 3
 //! sigma). The capture frame and marker offset are held at the truth (identity,
 //! zero): this test is about the tendon model, the frame fit has its own tests.
+//! Its progress reports are checked too: every model evaluation reports its rows
+//! at its start and end (`Progress::rows`), from the start values' solves on.
 
 use cablesense::calibrate::{
     calibrate, CalibrationModel, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam,
-    FrameSetup, LmStatus, ParamSpec, ReadingsModel, Recording, RigidTransform, SceneModel,
+    FrameSetup, LmStatus, ParamSpec, Progress, ReadingsModel, Recording, RigidTransform, RowWork,
+    SceneModel, Stage,
 };
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{set_values, ParamPath};
@@ -116,8 +119,33 @@ fn tendon_robot_calibrates_back_from_servo_readings() {
         capture_noise_m: NOISE,
         ..CalibrationSettings::default()
     };
-    let report = calibrate(&setup, &settings, &mut |_| {}).unwrap();
+    let mut seen: Vec<Progress> = Vec::new();
+    let report = calibrate(&setup, &settings, &mut |p| seen.push(*p)).unwrap();
     assert_eq!(report.status, LmStatus::Converged, "{:?}", report.warnings);
+    // progress: the start values' solves first, rows counted up to all 24, the
+    // sensitivities in the full stage, and a finished solve of every trial point
+    let first = seen[0].rows.expect("a rows report first");
+    assert_eq!(
+        (seen[0].stage, first.work, first.total),
+        (Stage::Start, RowWork::Solve, 24)
+    );
+    let rows: Vec<_> = seen
+        .iter()
+        .filter_map(|p| p.rows.map(|r| (p.stage, r)))
+        .collect();
+    assert!(rows.iter().all(|(_, r)| r.total == 24 && r.done <= r.total));
+    assert!(rows
+        .iter()
+        .any(|(s, r)| *s == Stage::Full && r.work == RowWork::Sensitivities && r.done == 24));
+    let solved = rows
+        .iter()
+        .filter(|(_, r)| r.work == RowWork::Solve && r.done == 24)
+        .count();
+    let trials = seen.iter().filter(|p| p.rows.is_none()).count();
+    assert!(
+        solved > report.iterations && solved > trials,
+        "{solved} {trials}"
+    );
     for (fp, want) in report.params.iter().zip(&truth) {
         let z = (fp.value - want) / fp.std_error;
         println!(

@@ -167,21 +167,47 @@ impl Default for CalibrationSettings {
 /// Which stage a progress report belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
+    /// The model at the start values, before the LM stages (`lm` is not yet
+    /// meaningful: iteration 0, cost NaN).
+    Start,
     /// Frame and offset only.
     Frame,
     /// All parameters.
     Full,
 }
 
-/// Progress of [`calibrate`] (one per LM trial).
+/// What the rows of a model evaluation are being put through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RowWork {
+    /// Forward solves (the poses at a trial point).
+    Solve,
+    /// Sensitivities to the scene parameters (the Jacobian at an accepted point).
+    Sensitivities,
+}
+
+/// Rows of the model evaluation in progress.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RowsProgress {
+    /// What is done to them.
+    pub work: RowWork,
+    /// Rows done so far (over all worker threads).
+    pub done: usize,
+    /// Rows in all.
+    pub total: usize,
+}
+
+/// Progress of [`calibrate`]: one report per LM trial (`rows: None`), and reports
+/// of the rows of each model evaluation while it runs (about every 0.1 s).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Progress {
     /// Stage.
     pub stage: Stage,
-    /// The LM's report.
+    /// The LM's report (the last one of this stage for a rows report).
     pub lm: LmIteration,
     /// Iteration limit of this stage.
     pub max_iterations: usize,
+    /// The model evaluation in progress; `None` for an LM trial's report.
+    pub rows: Option<RowsProgress>,
 }
 
 /// A fitted parameter (scene or non-scene).

@@ -39,7 +39,7 @@ mod stats;
 pub use conditioning::{Conditioning, InputTimeline, ReadingsHistory, MAX_GAP_S};
 pub use fit::{
     CalibrationReport, CalibrationSettings, FailedRow, FitParam, FittedParam, FrameSetup, Progress,
-    RowResult, Split, Stage,
+    RowResult, RowWork, RowsProgress, Split, Stage,
 };
 pub use frame::{kabsch, rotation_vector, umeyama, RigidTransform};
 pub use identify::{

@@ -13,6 +13,7 @@ use crate::statics::{Pose, SolveStatus, Start, Workspace};
 use crate::validation::{set_values, ParamPath};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A model to calibrate: given parameter values, predict each row's marker body pose.
 ///
@@ -82,6 +83,22 @@ pub trait CalibrationModel: Send {
     ) -> Result<(), CalibrationError> {
         finite_differences(self, values, steps, rows, out)
     }
+
+    /// [`CalibrationModel::sensitivities`] that adds each row to `done` when it is
+    /// finished (for progress reports from worker threads). Default: all rows at the
+    /// end.
+    fn sensitivities_counting(
+        &mut self,
+        values: &[f64],
+        steps: &[f64],
+        rows: &[RecordingRow],
+        out: &mut Sensitivities,
+        done: &AtomicUsize,
+    ) -> Result<(), CalibrationError> {
+        self.sensitivities(values, steps, rows, out)?;
+        done.fetch_add(rows.len(), Ordering::Relaxed);
+        Ok(())
+    }
 }
 
 /// Predicted poses of a run of rows and their parameter sensitivities.
@@ -118,7 +135,7 @@ pub struct RowFailure {
 }
 
 impl Sensitivities {
-    fn resize(&mut self, rows: usize, params: usize) {
+    pub(super) fn resize(&mut self, rows: usize, params: usize) {
         self.failed.clear();
         self.params = params;
         self.poses.resize(rows, identity_pose());

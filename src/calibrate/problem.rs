@@ -3,6 +3,7 @@
 //! sequence within a chunk), the capture frame and marker offset, whitened by the
 //! capture noise, with Gaussian priors (see [`super::calibrate`] for the residual).
 
+use super::fit::{RowWork, RowsProgress};
 use super::lm::LeastSquares;
 use super::model::{identity_pose, CalibrationModel, RowFailure, Sensitivities};
 use super::recording::RecordingRow;
@@ -11,6 +12,8 @@ use crate::math::exp_so3;
 use crate::statics::Pose;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
 
 /// Index layout of the full parameter vector: scene, rotation vector, translation, offset.
 const FRAME: usize = 0;
@@ -41,29 +44,56 @@ pub(super) struct Problem<'a, M> {
     /// Once set, a row failing outside the excluded set makes the evaluation an
     /// error (a rejected LM trial) instead of extending the set.
     pub(super) locked: bool,
+    /// Told the rows done of each model evaluation while it runs.
+    pub(super) report: Option<&'a dyn Fn(RowsProgress)>,
 }
 
-/// Work on one chunk of rows with one model.
-type ChunkFn<'f, M, T> = dyn Fn(&mut M, &[RecordingRow]) -> Result<T, CalibrationError> + Sync + 'f;
+/// Work on one chunk of rows with one model, counting the rows it has done.
+type ChunkFn<'f, M, T> =
+    dyn Fn(&mut M, &[RecordingRow], &AtomicUsize) -> Result<T, CalibrationError> + Sync + 'f;
+
+/// Interval of the rows reports.
+const REPORT_EVERY: Duration = Duration::from_millis(100);
 
 fn run_chunks<M: CalibrationModel, T: Send>(
     models: &mut [M],
     chunks: &[Range<usize>],
     rows: &[RecordingRow],
+    (work, report): (RowWork, Option<&dyn Fn(RowsProgress)>),
     f: &ChunkFn<'_, M, T>,
 ) -> Result<Vec<T>, CalibrationError> {
-    if models.len() == 1 {
-        return Ok(vec![f(&mut models[0], &rows[chunks[0].clone()])?]);
+    let done = AtomicUsize::new(0);
+    if models.len() == 1 && report.is_none() {
+        return Ok(vec![f(&mut models[0], &rows[chunks[0].clone()], &done)?]);
     }
     std::thread::scope(|s| {
         let handles: Vec<_> = models
             .iter_mut()
             .zip(chunks)
             .map(|(m, c)| {
-                let rows = &rows[c.clone()];
-                s.spawn(move || f(m, rows))
+                let (rows, done) = (&rows[c.clone()], &done);
+                s.spawn(move || f(m, rows, done))
             })
             .collect();
+        if let Some(report) = report {
+            // this thread only waits: it reports the workers' count at the start,
+            // now and then, and at the end
+            let total = rows.len();
+            let tell = || {
+                let done = done.load(Ordering::Relaxed);
+                report(RowsProgress { work, done, total });
+            };
+            tell();
+            let mut last = Instant::now();
+            while !handles.iter().all(|h| h.is_finished()) {
+                std::thread::sleep(Duration::from_millis(10));
+                if last.elapsed() >= REPORT_EVERY {
+                    tell();
+                    last = Instant::now();
+                }
+            }
+            tell();
+        }
         handles
             .into_iter()
             .map(|h| h.join().expect("a calibration worker panicked"))
@@ -105,6 +135,7 @@ impl<'a, M: CalibrationModel + Clone> Problem<'a, M> {
             excluded: vec![false; rows.len()],
             exclusions: Vec::new(),
             locked: false,
+            report: None,
         }
     }
 }
@@ -162,13 +193,24 @@ impl<M: CalibrationModel> Problem<'_, M> {
             return Ok(());
         }
         self.poses_at = None;
-        let out = run_chunks(&mut self.models, &self.chunks, self.rows, &|m, rows| {
-            m.set_params(values)?;
-            m.restart();
-            rows.iter()
-                .map(|r| m.predict_retrying(r))
-                .collect::<Result<Vec<_>, _>>()
-        })?;
+        let work = (RowWork::Solve, self.report);
+        let out = run_chunks(
+            &mut self.models,
+            &self.chunks,
+            self.rows,
+            work,
+            &|m, rows, done| {
+                m.set_params(values)?;
+                m.restart();
+                rows.iter()
+                    .map(|r| {
+                        let p = m.predict_retrying(r);
+                        done.fetch_add(1, Ordering::Relaxed);
+                        p
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            },
+        )?;
         let mut failed = Vec::new();
         self.poses.clear();
         for (i, r) in out.into_iter().flatten().enumerate() {
@@ -189,11 +231,18 @@ impl<M: CalibrationModel> Problem<'_, M> {
             return Ok(());
         }
         let steps = self.steps.clone();
-        let out = run_chunks(&mut self.models, &self.chunks, self.rows, &|m, rows| {
-            let mut s = Sensitivities::default();
-            m.sensitivities(values, &steps, rows, &mut s)?;
-            Ok(s)
-        })?;
+        let work = (RowWork::Sensitivities, self.report);
+        let out = run_chunks(
+            &mut self.models,
+            &self.chunks,
+            self.rows,
+            work,
+            &|m, rows, done| {
+                let mut s = Sensitivities::default();
+                m.sensitivities_counting(values, &steps, rows, &mut s, done)?;
+                Ok(s)
+            },
+        )?;
         let mut all = Sensitivities {
             params: self.ns,
             ..Sensitivities::default()

@@ -8,18 +8,27 @@
 //! [`super::conditioning`]) is applied to the whole recording a row came from
 //! ([`super::RowHistory`]), so `readings/time_offset_s` and `readings/backlash_m`
 //! are calibration parameters like any scene value (sensitivities by the checked
-//! central differences of [`super::finite_differences`]: the tendon solve has no
-//! derivative with respect to the readings to chain through).
+//! chained through the exact sensitivities of the tendon solve, see the `sens`
+//! submodule).
 
 use super::conditioning::{Conditioning, InputTimeline};
-use super::model::{marker_body_pose, patched_scene, CalibrationModel, TensionModel};
+use super::model::{
+    marker_body_pose, patched_scene, CalibrationModel, Sensitivities, TensionModel,
+};
 use super::recording::RecordingRow;
 use super::CalibrationError;
 use crate::files::Scene;
 use crate::statics::{Pose, Start};
 use crate::tendons::{Actuation, TendonWorkspace};
 use crate::validation::ParamPath;
+use std::collections::HashMap;
+use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
+
+// Exact (implicit-function) sensitivities of the rows' poses to the parameters.
+#[path = "readings_sens.rs"]
+mod sens;
+use sens::RowState;
 
 /// Servo readings -> tendon tensions and shape -> marker body pose.
 pub struct ReadingsModel {
@@ -38,6 +47,46 @@ pub struct ReadingsModel {
     cond: Conditioning,
     /// Conditioned readings (m) of every row of the last timeline used, row-major.
     conditioned: Option<(Arc<InputTimeline>, Vec<f64>)>,
+    /// Converged state of every row predicted at the current values, by line (the
+    /// sensitivities start from them instead of solving the rows again).
+    states: HashMap<usize, RowState>,
+}
+
+/// The readings (m) of `row` conditioned by `cond` into `q`; `cache` keeps the
+/// conditioned readings of the whole timeline of the last row's recording.
+fn conditioned_into(
+    cond: &Conditioning,
+    cache: &mut Option<(Arc<InputTimeline>, Vec<f64>)>,
+    columns: &[usize],
+    scale: f64,
+    row: &RecordingRow,
+    q: &mut [f64],
+) -> Result<(), CalibrationError> {
+    if cond.is_identity() {
+        for (q, &c) in q.iter_mut().zip(columns) {
+            *q = row.inputs[c] * scale;
+        }
+        return Ok(());
+    }
+    let h = row.history.as_ref().ok_or_else(|| {
+        CalibrationError::BadInput(format!(
+            "line {}: the scene's readings conditioning ({cond:?}) needs the row's recording \
+             (a row read by `Recording::load`, not built by hand)",
+            row.line
+        ))
+    })?;
+    let stale = !matches!(cache, Some((t, _)) if Arc::ptr_eq(t, &h.timeline));
+    if stale {
+        let all = h
+            .timeline
+            .conditioned(cond, columns, scale)
+            .map_err(model_err(format!("line {}: readings", row.line)))?;
+        *cache = Some((h.timeline.clone(), all));
+    }
+    let (_, all) = cache.as_ref().expect("set above");
+    let m = columns.len();
+    q.copy_from_slice(&all[h.index * m..(h.index + 1) * m]);
+    Ok(())
 }
 
 fn model_err(context: String) -> impl FnOnce(crate::ModelError) -> CalibrationError {
@@ -84,36 +133,20 @@ impl ReadingsModel {
             cold: true,
             cond: Conditioning::from_spec(scene.readings.as_ref()),
             conditioned: None,
+            states: HashMap::new(),
         })
     }
 
     /// The conditioned readings (m) of `row` into `self.q`.
     fn conditioned_readings(&mut self, row: &RecordingRow) -> Result<(), CalibrationError> {
-        if self.cond.is_identity() {
-            for (q, &c) in self.q.iter_mut().zip(&self.columns) {
-                *q = row.inputs[c] * self.scale;
-            }
-            return Ok(());
-        }
-        let h = row.history.as_ref().ok_or_else(|| {
-            CalibrationError::BadInput(format!(
-                "line {}: the scene's readings conditioning ({:?}) needs the row's recording \
-                 (a row read by `Recording::load`, not built by hand)",
-                row.line, self.cond
-            ))
-        })?;
-        let stale = !matches!(&self.conditioned, Some((t, _)) if Arc::ptr_eq(t, &h.timeline));
-        if stale {
-            let all = h
-                .timeline
-                .conditioned(&self.cond, &self.columns, self.scale)
-                .map_err(model_err(format!("line {}: readings", row.line)))?;
-            self.conditioned = Some((h.timeline.clone(), all));
-        }
-        let (_, all) = self.conditioned.as_ref().expect("set above");
-        let m = self.columns.len();
-        self.q.copy_from_slice(&all[h.index * m..(h.index + 1) * m]);
-        Ok(())
+        conditioned_into(
+            &self.cond,
+            &mut self.conditioned,
+            &self.columns,
+            self.scale,
+            row,
+            &mut self.q,
+        )
     }
 
     /// The reading columns of a scene's displacement-driven tendons (the default
@@ -153,6 +186,7 @@ impl Clone for ReadingsModel {
             cold: true,
             cond: self.cond,
             conditioned: None,
+            states: HashMap::new(),
         };
         m.set_params(&self.values)
             .expect("values this model already accepted");
@@ -173,6 +207,7 @@ impl CalibrationModel for ReadingsModel {
         self.cold = true;
         self.cond = Conditioning::from_spec(scene.readings.as_ref());
         self.conditioned = None;
+        self.states.clear();
         Ok(())
     }
 
@@ -196,10 +231,31 @@ impl CalibrationModel for ReadingsModel {
             });
         }
         self.cold = false;
-        Ok(marker_body_pose(
-            &self.ws.workspace_mut().solution(),
-            self.marker_s,
-        ))
+        let pose = marker_body_pose(&self.ws.workspace_mut().solution(), self.marker_s);
+        self.states
+            .insert(row.line, RowState::of(&self.ws, &self.q, pose));
+        Ok(pose)
+    }
+
+    fn sensitivities(
+        &mut self,
+        values: &[f64],
+        steps: &[f64],
+        rows: &[RecordingRow],
+        out: &mut Sensitivities,
+    ) -> Result<(), CalibrationError> {
+        self.exact_sensitivities(values, steps, rows, out, None)
+    }
+
+    fn sensitivities_counting(
+        &mut self,
+        values: &[f64],
+        steps: &[f64],
+        rows: &[RecordingRow],
+        out: &mut Sensitivities,
+        done: &AtomicUsize,
+    ) -> Result<(), CalibrationError> {
+        self.exact_sensitivities(values, steps, rows, out, Some(done))
     }
 }
 
@@ -272,6 +328,31 @@ impl CalibrationModel for SceneModel {
         match self {
             Self::Tension(m) => m.predict(row),
             Self::Readings(m) => m.predict(row),
+        }
+    }
+    fn sensitivities(
+        &mut self,
+        values: &[f64],
+        steps: &[f64],
+        rows: &[RecordingRow],
+        out: &mut Sensitivities,
+    ) -> Result<(), CalibrationError> {
+        match self {
+            Self::Tension(m) => m.sensitivities(values, steps, rows, out),
+            Self::Readings(m) => m.sensitivities(values, steps, rows, out),
+        }
+    }
+    fn sensitivities_counting(
+        &mut self,
+        values: &[f64],
+        steps: &[f64],
+        rows: &[RecordingRow],
+        out: &mut Sensitivities,
+        done: &AtomicUsize,
+    ) -> Result<(), CalibrationError> {
+        match self {
+            Self::Tension(m) => m.sensitivities_counting(values, steps, rows, out, done),
+            Self::Readings(m) => m.sensitivities_counting(values, steps, rows, out, done),
         }
     }
 }

@@ -4,16 +4,17 @@
 
 use super::fit::{
     CalibrationReport, CalibrationSettings, FailedRow, FitParam, FittedParam, FrameSetup, Progress,
-    RowResult, Split, Stage,
+    RowResult, RowsProgress, Split, Stage,
 };
 use super::frame::{kabsch, RigidTransform};
-use super::lm::{levenberg_marquardt, Bounds, Huber, LmSettings, LmStatus};
+use super::lm::{levenberg_marquardt, Bounds, Huber, LmIteration, LmSettings, LmStatus};
 use super::model::CalibrationModel;
 use super::problem::{rms, spread, Problem};
 use super::recording::Recording;
 use super::stats::{parameter_statistics, TipErrors};
 use super::CalibrationError;
 use nalgebra::Vector3;
+use std::cell::{Cell, RefCell};
 
 /// Names of the non-scene parameters, in layout order.
 pub fn frame_param_names() -> Vec<String> {
@@ -47,7 +48,9 @@ pub struct CalibrationSetup<'a, M> {
 }
 
 /// Calibrate the setup's scene parameters, capture frame and marker offset on its
-/// train rows; report errors on train and val. `observer` sees every LM trial.
+/// train rows; report errors on train and val. `observer` sees every LM trial
+/// and, about every 0.1 s, the rows done of the model evaluation in progress
+/// ([`Progress::rows`]).
 pub fn calibrate<M: CalibrationModel + Clone>(
     setup: &CalibrationSetup<'_, M>,
     settings: &CalibrationSettings,
@@ -107,6 +110,31 @@ pub fn calibrate<M: CalibrationModel + Clone>(
         .filter_map(|(k, p)| p.prior.map(|(m, s)| (k, m, s)))
         .collect();
     let steps = params.iter().map(|p| settings.fd_step * p.scale).collect();
+    // the observer is called by the LM's callbacks and, between them, while the
+    // model's rows are evaluated (the last LM report is repeated with the rows)
+    let observer = RefCell::new(observer);
+    let last = Cell::new(Progress {
+        stage: Stage::Start,
+        lm: LmIteration {
+            iteration: 0,
+            cost: f64::NAN,
+            damping: f64::NAN,
+            accepted: true,
+        },
+        max_iterations: 0,
+        rows: None,
+    });
+    let tell = |p: Progress| {
+        last.set(p);
+        (observer.borrow_mut())(&p);
+    };
+    let tell_rows = |r: RowsProgress| {
+        let p = Progress {
+            rows: Some(r),
+            ..last.get()
+        };
+        (observer.borrow_mut())(&p);
+    };
     let mut pb = Problem::new(
         model,
         rows,
@@ -116,6 +144,7 @@ pub fn calibrate<M: CalibrationModel + Clone>(
         settings.capture_noise_m,
         settings.threads,
     );
+    pb.report = Some(&tell_rows);
     let mut warnings = Vec::new();
     for (i, p) in params.iter().enumerate() {
         if params[..i].iter().any(|q| q.name == p.name) {
@@ -192,16 +221,28 @@ pub fn calibrate<M: CalibrationModel + Clone>(
             ..LmSettings::default()
         };
         let res = levenberg_marquardt(&mut pb, &z0, &Bounds::none(z0.len()), &lm, &mut |it| {
-            observer(&Progress {
+            tell(Progress {
                 stage: Stage::Frame,
                 lm: *it,
                 max_iterations: 50,
+                rows: None,
             })
         })?;
         full = pb.expand(&res.z);
         pb.full = full.clone();
     }
     let frame_start = full.clone();
+    // (the sensitivities at the start belong to the full stage's first point)
+    let before = last.get();
+    last.set(Progress {
+        stage: Stage::Full,
+        lm: LmIteration {
+            iteration: 0,
+            ..before.lm
+        },
+        max_iterations: settings.max_iterations,
+        ..before
+    });
     // the sensitivities at the start: rows failing in a perturbed solve are left out
     // too; then the set is closed (a trial point where another row fails is rejected)
     if ns > 0 {
@@ -246,10 +287,11 @@ pub fn calibrate<M: CalibrationModel + Clone>(
         ..LmSettings::default()
     };
     let res = levenberg_marquardt(&mut pb, &z0, &bounds, &lm, &mut |it| {
-        observer(&Progress {
+        tell(Progress {
             stage: Stage::Full,
             lm: *it,
             max_iterations: settings.max_iterations,
+            rows: None,
         })
     })?;
     let status = if too_many {

@@ -17,7 +17,7 @@ use anyhow::Context;
 use cablesense::calibrate::{
     calibrate, calibrated_scene, parse_row_range, write_report_svg, write_residuals_csv,
     CalibrationReport, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup,
-    ParamSpec, ReadingsModel, Recording, SceneModel, Stage,
+    ParamSpec, ReadingsModel, Recording, RowWork, SceneModel, Stage,
 };
 use cablesense::files::demo::DataSource;
 use cablesense::validation::{
@@ -384,16 +384,33 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     let started = std::time::Instant::now();
     let report = calibrate(&setup, &settings, &mut |p| {
         let stage = match p.stage {
+            Stage::Start => "start",
             Stage::Frame => "frame",
             Stage::Full => "all",
         };
         if p.stage == Stage::Full {
             pb.set_position(p.lm.iteration as u64);
         }
-        pb.set_message(format!(
-            "{stage}: cost {:.4e}, damping {:.1e}",
-            p.lm.cost, p.lm.damping
-        ));
+        let rows = match p.rows {
+            Some(r) => format!(
+                " | {} {}/{} rows",
+                match r.work {
+                    RowWork::Solve => "solve",
+                    RowWork::Sensitivities => "sensitivities",
+                },
+                r.done,
+                r.total
+            ),
+            None => String::new(),
+        };
+        if p.stage == Stage::Start {
+            pb.set_message(format!("model at the start values{rows}"));
+        } else {
+            pb.set_message(format!(
+                "{stage}: cost {:.4e}, damping {:.1e}{rows}",
+                p.lm.cost, p.lm.damping
+            ));
+        }
     });
     pb.finish_and_clear();
     let report = report?;
