@@ -101,6 +101,10 @@ pub(crate) struct Multi {
     /// Continuation: tangent `dx/dlam` at `ok`, and the summed corrector move.
     tan: Vec<f64>,
     moved: Vec<f64>,
+    /// Continuation: the tangent at the accepted point before `ok` (second-order
+    /// predictor), and scratch for the tangent at `ok` while a step is tried.
+    tan_prev: Vec<f64>,
+    tan_ok: Vec<f64>,
     lu: BandedLu,
     lu_valid: bool,
     /// Fresh Jacobians of the last Newton run.
@@ -128,6 +132,8 @@ impl Multi {
             dx: Vec::new(),
             tan: Vec::new(),
             moved: Vec::new(),
+            tan_prev: Vec::new(),
+            tan_ok: Vec::new(),
             lu: BandedLu::new(0, KL, KU),
             lu_valid: false,
             fresh: 0,
@@ -199,6 +205,8 @@ impl Multi {
         self.dx = vec![0.0; n];
         self.tan = vec![0.0; n];
         self.moved = vec![0.0; n];
+        self.tan_prev = vec![0.0; n];
+        self.tan_ok = vec![0.0; n];
         self.lu = BandedLu::new(n, KL, KU);
         self.lu_valid = false;
         self.layout = Some(layout);
