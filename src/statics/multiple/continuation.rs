@@ -19,6 +19,7 @@
 //! Not covered (as in single shooting): two eigenvalues crossing zero together (the
 //! isotropic rod's axial buckling), where `det J` keeps its sign.
 
+use super::cables::nbr_f64;
 use super::intervals::{design_intensity, integrate, new_rec, LoadCtx};
 use super::{max_abs, Multi, NODE};
 use crate::integrate::State;
@@ -292,8 +293,12 @@ impl Multi {
     /// `None`. Three `Dual<3>` directions `dm(0) = e_i` (`dn = 0`: under dead loads
     /// `n(s)` does not depend on the shape), carried interval by interval from the
     /// node states and re-orthonormalised at each node (module docs).
+    /// With tensioned cables the test is not defined (as in single shooting): `None`.
     pub fn conjugate_point(&mut self, plan: &Plan, theta: &[f64]) -> Option<f64> {
         let layout = self.layout.as_ref()?;
+        if layout.width != NODE {
+            return None;
+        }
         let (fs, ms) = (plan.force_scale, plan.moment_scale);
         let ld = LoadCtx { lam: 1.0, theta };
         // columns (theta, n/F, m/M) of the three directions
@@ -334,6 +339,7 @@ impl Multi {
                 k,
                 y0,
                 ld,
+                None,
                 &mut self.rhs_evals,
                 None,
                 &mut watch,
@@ -369,12 +375,14 @@ impl Multi {
         let ld = LoadCtx { lam: 1.0, theta };
         for k in 0..layout.len() {
             let y0 = self.nodes[k];
+            let nb = nbr_f64(layout, &self.nodes, k);
             let out = integrate(
                 plan,
                 layout,
                 k,
                 y0,
                 ld,
+                nb.as_ref(),
                 &mut self.rhs_evals,
                 Some(&mut rec),
                 &mut |_, _| {},
