@@ -64,7 +64,7 @@ mod output;
 
 pub(crate) use continuation::MultiArgs;
 
-use super::plan::Plan;
+use super::plan::{Event, Plan};
 use super::{SolveReport, SolveStatus};
 use crate::integrate::State;
 use crate::math::BandedLu;
@@ -183,29 +183,33 @@ impl Multi {
         if !plan.cables.iter().any(|c| c.tensioned) {
             return true;
         }
-        let gs = intervals::guide_s(plan);
-        let disks = intervals::cable_disks(plan);
-        let tol = 1e-9 * plan.length;
-        // every tensioned cable's route: guides g, g + 1, ... (the routes of
-        // `Plan::new`), disks past the base and strictly ordered
-        let mut route: Vec<Option<usize>> = vec![None; plan.cables.len()];
-        for (g, cs) in plan.guide_cables.iter().enumerate() {
-            for &(j, k) in cs {
-                if plan.cables[j].tensioned {
-                    let ok = match (k, route[j]) {
-                        (0, None) => true,
-                        (_, Some(prev)) => prev + 1 == g && gs[g] > gs[prev] + tol,
-                        _ => false,
-                    };
-                    if !ok || gs[g] <= tol {
-                        return false;
-                    }
-                    route[j] = Some(g);
-                }
-            }
-        }
-        // a cable disk's neighbours on any route are the neighbouring guides
-        (1..plan.n_guides).all(|g| !(disks[g] && disks[g - 1]) || gs[g] > gs[g - 1] + tol)
+        // (allocation-free: called by every solve of a workspace)
+        let tensioned_disk = |g: usize| {
+            plan.guide_cables[g]
+                .iter()
+                .any(|&(j, _)| plan.cables[j].tensioned)
+        };
+        // every tensioned cable's route runs through guides g, g + 1, ...
+        let consecutive = plan.guide_cables.iter().enumerate().all(|(g, cs)| {
+            cs.iter().all(|&(j, k)| {
+                !plan.cables[j].tensioned
+                    || k == 0
+                    || (g > 0 && plan.guide_cables[g - 1].contains(&(j, k - 1)))
+            })
+        });
+        // cable disks past the base, at distinct arc lengths (one per event group)
+        let disks_in = |r: std::ops::Range<usize>| {
+            plan.events[r]
+                .iter()
+                .filter(|e| matches!(e, Event::Guide(g) if tensioned_disk(*g)))
+                .count()
+        };
+        consecutive
+            && disks_in(plan.start_events.clone()) == 0
+            && plan
+                .intervals
+                .iter()
+                .all(|iv| disks_in(iv.events.clone()) <= 1)
     }
 
     /// The last solve converged here (a warm start exists).
