@@ -50,6 +50,45 @@ pub(super) struct Layout {
     pub nodes: Vec<std::ops::Range<usize>>,
     /// The design intensity `I_d` the layout was built for.
     pub design: f64,
+    /// Unknowns per node `k >= 1`: 9 (`theta, n, m`), or 12 with tensioned cables
+    /// (`theta, n, m, r`: the chords need the disks' positions).
+    pub width: usize,
+    /// With tensioned cables: per node interval, the cable disk (guide) whose event
+    /// ends it, if any.
+    pub end_disk: Vec<Option<usize>>,
+    /// With tensioned cables: per guide, the node that starts at it (cable disks).
+    pub disk_node: Vec<Option<usize>>,
+}
+
+/// Poses (position, rotation) of the previous and next cable disks (guides `g - 1`
+/// and `g + 1`) of the disk whose event ends an interval: their holes end the chords
+/// of the tensioned cables at that disk.
+#[derive(Clone, Copy)]
+pub(super) struct Nbr<T: Real> {
+    pub prev: Option<(Vector3<T>, Matrix3<T>)>,
+    pub next: Option<(Vector3<T>, Matrix3<T>)>,
+}
+
+/// Arc length of each guide's event (from the plan's intervals; 0 at the start).
+pub(super) fn guide_s(plan: &Plan) -> Vec<f64> {
+    let mut out = vec![0.0; plan.n_guides];
+    for iv in &plan.intervals {
+        for e in iv.events.clone() {
+            if let Event::Guide(g) = plan.events[e] {
+                out[g] = iv.s1;
+            }
+        }
+    }
+    out
+}
+
+/// Guides that carry a tensioned cable.
+pub(super) fn cable_disks(plan: &Plan) -> Vec<bool> {
+    let mut out = vec![false; plan.n_guides];
+    for (g, cs) in plan.guide_cables.iter().enumerate() {
+        out[g] = cs.iter().any(|&(j, _)| plan.cables[j].tensioned);
+    }
+    out
 }
 
 /// Design intensity (power of two, at least [`MIN_DESIGN`]) for intensity `i`.
@@ -67,7 +106,24 @@ impl Layout {
         let tol = 1e-9 * l;
         let k = (design.sqrt() / NODE_SPAN).ceil().max(4.0) as usize;
         let h_res = STEP_RES * l / design.sqrt();
-        let cuts: Vec<f64> = (1..k).map(|j| j as f64 * l / k as f64).collect();
+        let mut cuts: Vec<f64> = (1..k).map(|j| j as f64 * l / k as f64).collect();
+        let cables = plan.cables.iter().any(|c| c.tensioned);
+        let gs = guide_s(plan);
+        let disks = cable_disks(plan);
+        if cables {
+            // a node starts at every cable disk (its pose is then a node unknown that
+            // the chords of the neighbouring disks read); uniform cuts closer than a
+            // quarter interval to a disk are dropped
+            let dcuts: Vec<f64> = (0..plan.n_guides)
+                .filter(|&g| disks[g] && gs[g] > tol && gs[g] < l - tol)
+                .map(|g| gs[g])
+                .collect();
+            let near = 0.25 * l / k as f64;
+            cuts.retain(|c| dcuts.iter().all(|d| (c - d).abs() > near));
+            cuts.extend(dcuts);
+            cuts.sort_by(f64::total_cmp);
+            cuts.dedup_by(|a, b| (*a - *b).abs() <= tol);
+        }
         let mut pieces = Vec::new();
         let mut owner = Vec::new();
         for (i, iv) in plan.intervals.iter().enumerate() {
@@ -100,10 +156,33 @@ impl Layout {
                 nodes.push(p..p + 1);
             }
         }
+        let mut end_disk = vec![None; nodes.len()];
+        let mut disk_node = vec![None; plan.n_guides];
+        if cables {
+            for (i, r) in nodes.iter().enumerate() {
+                let p = &pieces[r.end - 1];
+                if !p.events {
+                    continue;
+                }
+                for e in plan.intervals[p.iv].events.clone() {
+                    if let Event::Guide(g) = plan.events[e] {
+                        if disks[g] {
+                            end_disk[i] = Some(g);
+                            if i + 1 < nodes.len() {
+                                disk_node[g] = Some(i + 1);
+                            }
+                        }
+                    }
+                }
+            }
+        }
         Self {
             pieces,
             nodes,
             design,
+            width: if cables { 12 } else { 9 },
+            end_disk,
+            disk_node,
         }
     }
 
@@ -144,6 +223,7 @@ pub(super) fn integrate<T: Real>(
     k: usize,
     mut y: State<T>,
     ld: LoadCtx,
+    nb: Option<&Nbr<T>>,
     rhs_evals: &mut u64,
     mut rec: Option<&mut Rec>,
     watch: &mut dyn FnMut(f64, &State<T>),
@@ -151,7 +231,7 @@ pub(super) fn integrate<T: Real>(
     let ls = plan.length;
     if k == 0 {
         for e in plan.start_events.clone() {
-            apply_event(plan, plan.events[e], &mut y, ld, rec.as_deref_mut());
+            apply_event(plan, plan.events[e], &mut y, ld, None, rec.as_deref_mut());
         }
     }
     let scale = ErrScale {
@@ -224,7 +304,7 @@ pub(super) fn integrate<T: Real>(
         }
         if p.events {
             for e in iv.events.clone() {
-                apply_event(plan, plan.events[e], &mut y, ld, rec.as_deref_mut());
+                apply_event(plan, plan.events[e], &mut y, ld, nb, rec.as_deref_mut());
             }
         }
     }
@@ -256,13 +336,16 @@ fn v3<T: Real>(v: &Vector3<f64>) -> Vector3<T> {
 
 /// The events of a passive rod (the cable-free part of `statics::pass`): point loads
 /// `n+ = n- - F`, `m+ = m- - tau` (thesis 3.5.1, 3.5.3), world or body frame; point
-/// guide masses; pose and hole records. Tensioned cables are not handled here
-/// ([`super::Multi::supports`]).
+/// guide masses; pose and hole records; the chord forces of tensioned cables at a
+/// cable disk (as in `statics::pass`: thesis 3.8.1 routing, each chord pulls the disk
+/// along itself, `n+ = n- - f`, `m+ = m- - arm x f`), the neighbouring holes from the
+/// poses in `nb`.
 fn apply_event<T: Real>(
     plan: &Plan,
     e: Event,
     y: &mut State<T>,
     ld: LoadCtx,
+    nb: Option<&Nbr<T>>,
     rec: Option<&mut Rec>,
 ) {
     let pose = |y: &State<T>| {
@@ -309,7 +392,51 @@ fn apply_event<T: Real>(
                     r.holes[j][k] = v.r + v.rot * plan.cables[j].hole_local[k];
                 }
             }
+            if let Some(nb) = nb {
+                chords(plan, g, y, ld.lam, nb);
+            }
         }
+    }
+}
+
+/// The tensioned cables' chord forces at guide `g` (mirrors `statics::pass`, with the
+/// holes of the previous and next disks from `nb`; routes run through consecutive
+/// guides, [`super::Multi::supports`]).
+fn chords<T: Real>(plan: &Plan, g: usize, y: &mut State<T>, lam: f64, nb: &Nbr<T>) {
+    for &(j, k) in &plan.guide_cables[g] {
+        let c = &plan.cables[j];
+        if !c.tensioned {
+            continue;
+        }
+        let arm = y.rot * v3::<T>(&c.hole_local[k]);
+        let p = y.r + arm;
+        let t = c.tension * lam;
+        let prev = if k == 0 {
+            v3::<T>(&c.base_hole)
+        } else {
+            let Some((r, rot)) = nb.prev else { continue };
+            r + rot * v3::<T>(&c.hole_local[k - 1])
+        };
+        let mut f = unit(prev - p).map(|x| x.scale(t * c.factor[k]));
+        if k + 1 < c.len {
+            if let Some((r, rot)) = nb.next {
+                let next = r + rot * v3::<T>(&c.hole_local[k + 1]);
+                f += unit(next - p).map(|x| x.scale(t * c.factor[k + 1]));
+            }
+        }
+        y.n -= f;
+        y.m -= arm.cross(&f);
+    }
+}
+
+#[inline]
+fn unit<T: Real>(a: Vector3<T>) -> Vector3<T> {
+    let nn = a.dot(&a);
+    if nn.re() > 0.0 {
+        let inv = T::one() / nn.sqrt();
+        a * inv
+    } else {
+        a
     }
 }
 

@@ -26,10 +26,12 @@
 //! **Unknowns** (scaled, `F = EI/L^2`, `M = EI/L`). Node 0 (the base, `r(0)`, `R(0)`
 //! given): `n(0)/F`, `m(0)/M` (6). Node `k >= 1`: a rotation increment `theta`
 //! (`R_k <- R_k exp(theta^)`, folded into `R_k` after every step, so the Jacobian is
-//! taken at `theta = 0`), `n/F`, `m/M` (9). Positions are not unknowns: with the loads
-//! handled here (world or body point forces and torques, gravity, passive cables)
-//! `r` does not enter the equations of `R`, `n`, `m` (eq. 2.3 only feeds eq. 2.11
-//! through `r'`), so each node's `r` is the previous interval's end, exactly.
+//! taken at `theta = 0`), `n/F`, `m/M` (9). Positions are not unknowns: with point
+//! forces and torques (world or body), gravity and passive cables `r` does not enter
+//! the equations of `R`, `n`, `m` (eq. 2.3 only feeds eq. 2.11 through `r'`), so each
+//! node's `r` is the previous interval's end, exactly. Tensioned cables' chords read
+//! the disks' positions: then a node starts at every cable disk and `r/L` is a node
+//! unknown too (12), with a position continuity residual ([`cables`]).
 //!
 //! **Residuals.** Interval `k < K - 1`: `vee(skew(R_{k+1}^T R_end))` (the rotation
 //! mismatch, 3), `(n_end - n_{k+1})/F`, `(m_end - m_{k+1})/M`; the last interval:
@@ -50,10 +52,11 @@
 //! single eigenvalue crosses zero), and after world-fixed loads Jacobi's test runs on
 //! the nodes with re-orthonormalised directions (`conjugate_point`).
 //!
-//! Not handled here: tensioned cables (their chords couple the disks on both sides of
-//! a node) and workspaces with load parameters (the estimator's: its sensitivities
-//! are single shooting's); the workspace keeps single shooting for them.
+//! Not handled here: workspaces with load parameters (the estimator's: its
+//! sensitivities are single shooting's), continuously routed tendons, and tensioned
+//! cables whose routes skip a disk; the workspace keeps single shooting for them.
 
+mod cables;
 mod continuation;
 mod intervals;
 mod newton;
@@ -61,7 +64,7 @@ mod output;
 
 pub(crate) use continuation::MultiArgs;
 
-use super::plan::Plan;
+use super::plan::{Event, Plan};
 use super::{SolveReport, SolveStatus};
 use crate::integrate::State;
 use crate::math::BandedLu;
@@ -80,6 +83,11 @@ pub(crate) const MULTI_MAX_INTENSITY: f64 = 4096.0;
 const NODE: usize = 9;
 /// Rows and columns of the base node and of the tip conditions.
 const BASE: usize = 6;
+/// Rows and columns of node `k >= 1` with tensioned cables (`theta, n, m, r`).
+const NODE_R: usize = 12;
+/// Dual directions of an interval's pass with tensioned cables: its own node's
+/// [`NODE_R`], then the previous and the next cable disk's pose (`theta, r`, 6 each).
+const CABLE_DIRS: usize = NODE_R + 12;
 const KL: usize = 11;
 const KU: usize = 14;
 
@@ -101,8 +109,14 @@ pub(crate) struct Multi {
     /// Continuation: tangent `dx/dlam` at `ok`, and the summed corrector move.
     tan: Vec<f64>,
     moved: Vec<f64>,
+    /// Continuation: the tangent at the accepted point before `ok` (second-order
+    /// predictor), and scratch for the tangent at `ok` while a step is tried.
+    tan_prev: Vec<f64>,
+    tan_ok: Vec<f64>,
     lu: BandedLu,
     lu_valid: bool,
+    /// Unknowns per node `k >= 1` ([`NODE`] or [`NODE_R`]).
+    width: usize,
     /// Fresh Jacobians of the last Newton run.
     fresh: usize,
     /// Sign of `det J` at the last converged point (NaN: unknown, e.g. after a re-mesh).
@@ -128,8 +142,11 @@ impl Multi {
             dx: Vec::new(),
             tan: Vec::new(),
             moved: Vec::new(),
+            tan_prev: Vec::new(),
+            tan_ok: Vec::new(),
             lu: BandedLu::new(0, KL, KU),
             lu_valid: false,
+            width: NODE,
             fresh: 0,
             sign: f64::NAN,
             last: intervals::Rec::default(),
@@ -149,15 +166,50 @@ impl Multi {
         }
     }
 
-    /// Whether multiple shooting handles the plan: no tensioned cable, and no load
-    /// parameters (a workspace with parameters serves the estimator, whose
-    /// sensitivities and linearisation are single shooting's).
+    /// Whether multiple shooting handles the plan: no load parameters (a workspace
+    /// with parameters serves the estimator, whose sensitivities and linearisation are
+    /// single shooting's), no continuously routed tendon, and tensioned cables only
+    /// through consecutive guides strictly inside the rod (a node starts at each of
+    /// their disks, whose pose the neighbouring disks' chords read).
     pub fn supports(plan: &Plan) -> bool {
         // continuously routed tendons (`statics::continuous`) change the right-hand
         // side and carry integrated lengths: the intervals here do not model them
-        !plan.cables.iter().any(|c| c.tensioned || c.routed)
-            && plan.routed.is_empty()
-            && plan.params.is_empty()
+        if plan.cables.iter().any(|c| c.routed) || !plan.routed.is_empty() {
+            return false;
+        }
+        if !plan.params.is_empty() {
+            return false;
+        }
+        if !plan.cables.iter().any(|c| c.tensioned) {
+            return true;
+        }
+        // (allocation-free: called by every solve of a workspace)
+        let tensioned_disk = |g: usize| {
+            plan.guide_cables[g]
+                .iter()
+                .any(|&(j, _)| plan.cables[j].tensioned)
+        };
+        // every tensioned cable's route runs through guides g, g + 1, ...
+        let consecutive = plan.guide_cables.iter().enumerate().all(|(g, cs)| {
+            cs.iter().all(|&(j, k)| {
+                !plan.cables[j].tensioned
+                    || k == 0
+                    || (g > 0 && plan.guide_cables[g - 1].contains(&(j, k - 1)))
+            })
+        });
+        // cable disks past the base, at distinct arc lengths (one per event group)
+        let disks_in = |r: std::ops::Range<usize>| {
+            plan.events[r]
+                .iter()
+                .filter(|e| matches!(e, Event::Guide(g) if tensioned_disk(*g)))
+                .count()
+        };
+        consecutive
+            && disks_in(plan.start_events.clone()) == 0
+            && plan
+                .intervals
+                .iter()
+                .all(|iv| disks_in(iv.events.clone()) <= 1)
     }
 
     /// The last solve converged here (a warm start exists).
@@ -167,16 +219,7 @@ impl Multi {
 
     /// Number of unknowns of the current layout.
     fn n_unknowns(&self) -> usize {
-        self.nodes.len().saturating_sub(1) * NODE + BASE
-    }
-
-    /// Column (and residual row) offset of node `k`'s unknowns.
-    fn offset(k: usize) -> usize {
-        if k == 0 {
-            0
-        } else {
-            BASE + NODE * (k - 1)
-        }
+        self.nodes.len().saturating_sub(1) * self.width + BASE
     }
 
     /// Build the layout for `design` and size the buffers (allocates).
@@ -193,13 +236,22 @@ impl Multi {
         self.trial = vec![base; k];
         self.ok = vec![base; k];
         self.ends = vec![base; k];
-        let n = (k - 1) * NODE + BASE;
+        let w = layout.width;
+        let n = (k - 1) * w + BASE;
+        self.width = w;
         self.res = vec![0.0; n];
         self.res_trial = vec![0.0; n];
         self.dx = vec![0.0; n];
         self.tan = vec![0.0; n];
         self.moved = vec![0.0; n];
-        self.lu = BandedLu::new(n, KL, KU);
+        self.tan_prev = vec![0.0; n];
+        self.tan_ok = vec![0.0; n];
+        let (kl, ku) = if w == NODE {
+            (KL, KU)
+        } else {
+            band(&layout, w)
+        };
+        self.lu = BandedLu::new(n, kl, ku);
         self.lu_valid = false;
         self.layout = Some(layout);
     }
@@ -229,6 +281,44 @@ impl Multi {
             .first()
             .map_or((Vector3::zeros(), Vector3::zeros()), |y| (y.n, y.m))
     }
+}
+
+/// Column (and residual row) offset of node `k`'s unknowns (`w` per node `k >= 1`).
+fn offset(w: usize, k: usize) -> usize {
+    if k == 0 {
+        0
+    } else {
+        BASE + w * (k - 1)
+    }
+}
+
+/// Lower and upper bandwidths of the Jacobian with tensioned cables: interval `i`'s
+/// rows (from `w i`) reach its own node, node `i + 1`, and the nodes of the previous
+/// and next cable disks of the disk that ends it.
+fn band(layout: &Layout, w: usize) -> (usize, usize) {
+    let kn = layout.len();
+    let (mut kl, mut ku) = (0usize, 0usize);
+    for i in 0..kn {
+        let rows = (w * i, w * i + if i + 1 < kn { w } else { BASE } - 1);
+        let mut lo = offset(w, i);
+        let mut hi = if i + 1 < kn {
+            offset(w, i + 1) + w - 1
+        } else {
+            offset(w, i) + if i == 0 { BASE } else { w } - 1
+        };
+        if let Some(g) = layout.end_disk[i] {
+            let prev = g.checked_sub(1).and_then(|p| layout.disk_node[p]);
+            if let Some(j) = prev.filter(|&j| j > 0) {
+                lo = lo.min(offset(w, j));
+            }
+            if let Some(j) = layout.disk_node.get(g + 1).copied().flatten() {
+                hi = hi.max(offset(w, j) + w - 1);
+            }
+        }
+        kl = kl.max(rows.1.saturating_sub(lo));
+        ku = ku.max(hi.saturating_sub(rows.0));
+    }
+    (kl, ku)
 }
 
 fn max_abs(v: &[f64]) -> f64 {

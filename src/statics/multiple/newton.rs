@@ -1,8 +1,9 @@
 //! Residual, exact banded Jacobian and Newton with a backtracking line search for the
 //! multiple-shooting unknowns (layout in the module docs).
 
+use super::cables::nbr_f64;
 use super::intervals::{integrate, LoadCtx};
-use super::{max_abs, norm2, Multi, BASE, NODE};
+use super::{max_abs, norm2, offset, Multi, BASE, NODE, NODE_R};
 use crate::integrate::State;
 use crate::math::{exp_so3, Dual, Real};
 use crate::statics::plan::Plan;
@@ -27,7 +28,12 @@ fn skew_vee<T: Real>(e: &Matrix3<T>) -> Vector3<T> {
 
 /// Residual rows of interval `k` from its end state `y` and the next node `next`
 /// (`None`: the free tip, `n(L+) = m(L+) = 0`, thesis table 2.1), into `out`.
-fn residual_rows<T: Real>(plan: &Plan, y: &State<T>, next: Option<&State<f64>>, out: &mut [T]) {
+pub(super) fn residual_rows<T: Real>(
+    plan: &Plan,
+    y: &State<T>,
+    next: Option<&State<f64>>,
+    out: &mut [T],
+) {
     let (fs, ms) = (plan.force_scale, plan.moment_scale);
     match next {
         Some(nx) => {
@@ -37,6 +43,10 @@ fn residual_rows<T: Real>(plan: &Plan, y: &State<T>, next: Option<&State<f64>>, 
                 out[a] = rho[a];
                 out[3 + a] = (y.n[a] - T::cst(nx.n[a])).scale(1.0 / fs);
                 out[6 + a] = (y.m[a] - T::cst(nx.m[a])).scale(1.0 / ms);
+                if out.len() > NODE {
+                    // with tensioned cables: position continuity (`r` is a node unknown)
+                    out[9 + a] = (y.r[a] - T::cst(nx.r[a])).scale(1.0 / plan.length);
+                }
             }
         }
         None => {
@@ -61,13 +71,16 @@ impl Multi {
             (&mut self.nodes, &mut self.res)
         };
         let kn = layout.len();
+        let w = layout.width;
         for k in 0..kn {
+            let nb = nbr_f64(layout, states, k);
             let out = integrate::<f64>(
                 plan,
                 layout,
                 k,
                 states[k],
                 ld,
+                nb.as_ref(),
                 &mut self.rhs_evals,
                 None,
                 &mut |_, _| {},
@@ -77,10 +90,10 @@ impl Multi {
                 return false;
             };
             self.ends[k] = y;
-            let row = NODE * k;
-            let width = if k + 1 < kn { NODE } else { BASE };
+            let row = w * k;
+            let width = if k + 1 < kn { w } else { BASE };
             residual_rows(plan, &y, states.get(k + 1), &mut res[row..row + width]);
-            if k + 1 < kn {
+            if k + 1 < kn && w == NODE {
                 states[k + 1].r = y.r;
             }
         }
@@ -90,6 +103,9 @@ impl Multi {
     /// Exact Jacobian at the node states into the banded LU (one `Dual<9>` pass per
     /// interval). `false` when a pass failed.
     pub(super) fn jacobian(&mut self, plan: &Plan, ld: LoadCtx) -> bool {
+        if self.width == NODE_R {
+            return self.jacobian_cables(plan, ld);
+        }
         let Some(layout) = self.layout.as_ref() else {
             return false;
         };
@@ -105,6 +121,7 @@ impl Multi {
                 k,
                 y0,
                 ld,
+                None,
                 &mut self.rhs_evals,
                 None,
                 &mut |_, _| {},
@@ -116,7 +133,7 @@ impl Multi {
             let next = (!last).then(|| &self.nodes[k + 1]);
             let mut rows = [Dual::<NODE>::constant(0.0); NODE];
             residual_rows(plan, &y, next, &mut rows);
-            let (row, c0) = (NODE * k, Self::offset(k));
+            let (row, c0) = (NODE * k, offset(NODE, k));
             let (width, dirs) = (
                 if last { BASE } else { NODE },
                 if k == 0 { BASE } else { NODE },
@@ -130,7 +147,7 @@ impl Multi {
                 // d/d(node k + 1): -(tr E I - E)/2 for the rotation rows, -I otherwise
                 let e = nx.rot.transpose() * y.rot.map(|x| x.re());
                 let blk = (Matrix3::identity() * e.trace() - e) * -0.5;
-                let c1 = Self::offset(k + 1);
+                let c1 = offset(NODE, k + 1);
                 for i in 0..3 {
                     for j in 0..3 {
                         self.lu.set(row + i, c1 + j, blk[(i, j)]);
@@ -147,7 +164,8 @@ impl Multi {
     /// `dst = src (+) alpha dx`: base node `n, m`; other nodes `R <- R exp(theta^)`,
     /// `n`, `m` (scaled by `F`, `M`).
     pub(super) fn step_into(&mut self, plan: &Plan, alpha: f64, to_trial: bool) {
-        let (fs, ms) = (plan.force_scale, plan.moment_scale);
+        let (fs, ms, ls) = (plan.force_scale, plan.moment_scale, plan.length);
+        let w = self.width;
         let (src, dst) = if to_trial {
             (&self.nodes, &mut self.trial)
         } else {
@@ -156,7 +174,7 @@ impl Multi {
         let dx = if to_trial { &self.dx } else { &self.tan };
         for (k, (s, d)) in src.iter().zip(dst.iter_mut()).enumerate() {
             *d = *s;
-            let o = Self::offset(k);
+            let o = offset(w, k);
             let v = |i: usize| Vector3::new(dx[i], dx[i + 1], dx[i + 2]) * alpha;
             if k == 0 {
                 d.n += v(o) * fs;
@@ -165,6 +183,9 @@ impl Multi {
                 d.rot = s.rot * exp_so3(&v(o));
                 d.n += v(o + 3) * fs;
                 d.m += v(o + 6) * ms;
+                if w == NODE_R {
+                    d.r += v(o + 9) * ls;
+                }
             }
         }
     }

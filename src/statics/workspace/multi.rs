@@ -1,15 +1,17 @@
 //! The switch between single shooting (this workspace) and multiple shooting
 //! (`statics::multiple`) for large loads.
 //!
-//! Multiple shooting answers a solve when the loads are ones it handles (no tensioned
-//! cable) with intensity at most [`MULTI_MAX_INTENSITY`], and
+//! Multiple shooting answers a solve when the loads are ones it handles
+//! (`Multi::supports`: no load parameters, no continuous tendon, tensioned cables
+//! through consecutive disks) with intensity at most [`MULTI_MAX_INTENSITY`], and
 //! - a cold solve (with `continuation`; or a warm one with no solution to start from)
 //!   has intensity above [`MULTI_INTENSITY`];
 //! - a warm solve above [`MULTI_INTENSITY`] follows a multiple-shooting solution
 //!   (at or below it, single shooting takes over again from that solution's base
 //!   wrench: faster, and well-conditioned there);
 //! - single shooting's cold or warm solve ended without converging (or `unstable`),
-//!   with `continuation`, at an intensity above [`MULTI_FALLBACK`].
+//!   with `continuation`, at an intensity above [`MULTI_FALLBACK`] (above
+//!   [`MULTI_INTENSITY`] with tensioned cables).
 //!
 //! So a control loop's warm solves stay on single shooting as long as it converges.
 //! Everything the workspace hands out afterwards (tip, base wrench, cable lengths,
@@ -56,9 +58,15 @@ impl Workspace {
         status: SolveStatus,
         intensity: f64,
     ) -> Option<SolveReport> {
+        // with tensioned cables only above MULTI_INTENSITY: below, single shooting's
+        // status stands (near the tension fold, `T r L/EI` ~ 7.9-8.3, a solve on
+        // multiple shooting's finer steps lands 0.1 mm from single shooting's branch
+        // point, which `tests/stability.rs` tracks at 1 um)
+        let tensioned = self.plan.cables.iter().any(|c| c.tensioned);
         if status.is_converged()
             || !self.settings.continuation
             || intensity <= MULTI_FALLBACK
+            || (tensioned && intensity <= MULTI_INTENSITY)
             || !self.multi_allowed(intensity)
         {
             return None;
