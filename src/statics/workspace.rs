@@ -123,6 +123,10 @@ pub struct Workspace {
     lu: DenseLu,
     /// Chord steps: the inverse of `lu`'s Jacobian with Broyden updates.
     broyden: Broyden,
+    /// Chord steps use `broyden` (warm solves only: cold solves and continuation keep
+    /// the plain chord steps, which served them better: `forward_cold_tensioned`
+    /// took 1.6x as long with the updates).
+    use_broyden: bool,
     /// Warm solves: secant predictor from the last two solutions.
     secant: Secant,
     b64: PassBuf<f64>,
@@ -202,6 +206,7 @@ impl Workspace {
             res: vec![0.0; n],
             lu: DenseLu::new(n),
             broyden: Broyden::new(n),
+            use_broyden: false,
             secant: Secant::new(n),
             robot,
             loads,
@@ -363,7 +368,9 @@ impl Workspace {
         if warm {
             self.x_start.copy_from_slice(&self.x);
             self.b64.local_tol = LOCAL_TOL;
+            self.use_broyden = true;
             (status, iterations) = self.newton(1.0, self.settings.max_iterations);
+            self.use_broyden = false;
             // branch guard, warm: a solve its tangent step did not describe may have
             // jumped to another equilibrium; answer as a cold (checked) solve would
             if status.is_converged()

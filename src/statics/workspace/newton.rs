@@ -181,7 +181,7 @@ impl Workspace {
                     _ => return (self.status_here(SolveStatus::IllConditioned), it),
                 }
             }
-            if fresh {
+            if fresh || !self.use_broyden {
                 for i in 0..n {
                     self.dx[i] = -self.res[i];
                 }
@@ -198,7 +198,9 @@ impl Workspace {
                 }
                 chord_steps += 1;
                 if self.eval_trial(lam) && norm2(&self.b64.res) < CHORD_CONTRACTION * f0 {
-                    self.broyden.update(&self.dx, &self.res, &self.b64.res);
+                    if self.use_broyden {
+                        self.broyden.update(&self.dx, &self.res, &self.b64.res);
+                    }
                     std::mem::swap(&mut self.x, &mut self.x_trial);
                     self.res.copy_from_slice(&self.b64.res);
                     self.note_first_step();
