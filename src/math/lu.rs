@@ -10,6 +10,8 @@ pub struct DenseLu {
     n: usize,
     a: Vec<f64>,
     piv: Vec<usize>,
+    /// Calls of [`DenseLu::factor`] so far (tells users of the factors when they changed).
+    factorizations: u64,
 }
 
 impl DenseLu {
@@ -19,12 +21,18 @@ impl DenseLu {
             n,
             a: vec![0.0; n * n],
             piv: vec![0; n],
+            factorizations: 0,
         }
     }
 
     /// Size of the system.
     pub fn dim(&self) -> usize {
         self.n
+    }
+
+    /// Number of factorisations so far (a new value means new factors).
+    pub fn factorizations(&self) -> u64 {
+        self.factorizations
     }
 
     /// Mutable row-major storage of the matrix to factor: `a[i * n + j]`.
@@ -35,6 +43,7 @@ impl DenseLu {
     /// Factor in place. Returns the reciprocal condition estimate
     /// `min |pivot| / max |pivot|`, or `None` when a pivot is zero or not finite.
     pub fn factor(&mut self) -> Option<f64> {
+        self.factorizations += 1;
         let n = self.n;
         let a = &mut self.a;
         let (mut pmin, mut pmax) = (f64::INFINITY, 0.0f64);

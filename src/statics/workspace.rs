@@ -59,6 +59,12 @@ mod chords;
 mod sweep;
 use sweep::{sweep, Wide};
 
+mod broyden;
+use broyden::Broyden;
+
+mod predict;
+use predict::Secant;
+
 mod continuation;
 mod multi;
 mod newton;
@@ -115,6 +121,14 @@ pub struct Workspace {
     dx: Vec<f64>,
     res: Vec<f64>,
     lu: DenseLu,
+    /// Chord steps: the inverse of `lu`'s Jacobian with Broyden updates.
+    broyden: Broyden,
+    /// Chord steps use `broyden` (warm solves only: cold solves and continuation keep
+    /// the plain chord steps, which served them better: `forward_cold_tensioned`
+    /// took 1.6x as long with the updates).
+    use_broyden: bool,
+    /// Warm solves: secant predictor from the last two solutions.
+    secant: Secant,
     b64: PassBuf<f64>,
     b3: PassBuf<Dual<3>>,
     b6: PassBuf<Dual<6>>,
@@ -191,6 +205,9 @@ impl Workspace {
             dx: vec![0.0; n],
             res: vec![0.0; n],
             lu: DenseLu::new(n),
+            broyden: Broyden::new(n),
+            use_broyden: false,
+            secant: Secant::new(n),
             robot,
             loads,
             settings,
@@ -343,10 +360,21 @@ impl Workspace {
         }
         let (mut status, mut iterations, mut continuation_steps) = (SolveStatus::NonFinite, 0, 0);
         let mut cold = !warm;
+        // the secant predictor moves a warm start along the load path, except where
+        // the branch guard's step check of large moves is in force
+        // Not with load parameters: the estimators' inner solves keep their old paths
+        // (with both on, tests/estimate_joint.rs's nested LM moved by 2.5e-7 relative
+        // and an unobservable case changed status).
+        let plain = self.plan.params.is_empty();
+        let predict = plain && !(self.guarded() && intensity > CERTIFY_INTENSITY);
+        self.secant
+            .start(&mut self.x, &self.loads, &self.b64.theta, warm && predict);
         if warm {
             self.x_start.copy_from_slice(&self.x);
             self.b64.local_tol = LOCAL_TOL;
+            self.use_broyden = plain;
             (status, iterations) = self.newton(1.0, self.settings.max_iterations);
+            self.use_broyden = false;
             // branch guard, warm: a solve its tangent step did not describe may have
             // jumped to another equilibrium; answer as a cold (checked) solve would
             if status.is_converged()
@@ -386,6 +414,8 @@ impl Workspace {
             return rep;
         }
         self.has_solution = status.is_converged();
+        self.secant
+            .finish(self.has_solution, &self.x, &self.loads, &self.b64.theta);
         self.last_intensity = intensity;
         self.report = SolveReport {
             status,

@@ -181,10 +181,16 @@ impl Workspace {
                     _ => return (self.status_here(SolveStatus::IllConditioned), it),
                 }
             }
-            for i in 0..n {
-                self.dx[i] = -self.res[i];
+            if fresh || !self.use_broyden {
+                for i in 0..n {
+                    self.dx[i] = -self.res[i];
+                }
+                self.lu.solve_in_place(&mut self.dx);
+            } else {
+                // the reused Jacobian's inverse with the Broyden updates so far
+                self.broyden.sync(&self.lu);
+                self.broyden.step(&self.res, &mut self.dx);
             }
-            self.lu.solve_in_place(&mut self.dx);
             let f0 = norm2(&self.res);
             if !fresh {
                 for i in 0..n {
@@ -192,6 +198,9 @@ impl Workspace {
                 }
                 chord_steps += 1;
                 if self.eval_trial(lam) && norm2(&self.b64.res) < CHORD_CONTRACTION * f0 {
+                    if self.use_broyden {
+                        self.broyden.update(&self.dx, &self.res, &self.b64.res);
+                    }
                     std::mem::swap(&mut self.x, &mut self.x_trial);
                     self.res.copy_from_slice(&self.b64.res);
                     self.note_first_step();
