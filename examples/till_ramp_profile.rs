@@ -66,6 +66,7 @@ fn main() {
     let rep = ws.solve(Start::Cold);
     eprintln!("cold: {rep:?}");
     let (mut rhs, mut it, mut jac, mut failed) = (0u64, 0usize, 0u64, 0usize);
+    let c0 = ws.rhs_counts();
     for k in 0..reps {
         loads.tensions_n[0] = ramp[k % ramp.len()];
         ws.set_loads(&loads).unwrap();
@@ -80,6 +81,13 @@ fn main() {
         }
     }
     let r = reps as f64;
+    let c1 = ws.rhs_counts();
+    eprintln!(
+        "{mode}: f64 rhs/solve {:.1}, dual rhs/solve {:.1}, gap re-integrations/solve {:.1}",
+        (c1.f64_rhs - c0.f64_rhs) as f64 / r,
+        (c1.dual_rhs - c0.dual_rhs) as f64 / r,
+        (c1.local_iterations - c0.local_iterations) as f64 / r
+    );
     eprintln!(
         "{mode}: {reps} warm solves: rhs/solve {:.1}, iterations/solve {:.2}, jacobians/solve {:.3}, failed {failed}",
         rhs as f64 / r,

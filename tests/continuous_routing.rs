@@ -651,3 +651,61 @@ fn displacement_driven_continuous_tendons_are_refused_by_name() {
         "{e}"
     );
 }
+
+/// Warm solves along a tension ramp on the disk model (40 disks, the condensed
+/// coupling): each warm tip equals a cold solve of the same loads (2e-9 m: both
+/// stop within the 1e-10 scaled tolerance), and the load-path predictor's
+/// extrapolated next holes (`pass::local_next`) keep the local iteration short: at
+/// most 2 re-integrations per disk gap per solve on average (1.54 measured; without
+/// them the first pass of each step starts 1e-9..1e-6 L off: 3.51 here, and Till's
+/// 100-disk ramp in `examples/till_ramp_profile.rs` went from 2.77 to 1.10).
+#[test]
+fn warm_ramp_on_disks_matches_cold_with_few_local_iterations() {
+    let sc = till();
+    let n = 40usize;
+    let h = 0.5 / n as f64;
+    let guides = GuideSpec {
+        count: n,
+        first_offset_m: h,
+        spacing_m: h,
+        thickness_m: 0.0,
+        diameter_m: 0.04,
+        mass_kg: 0.0,
+        holes: HolesSpec {
+            radius_m: 0.01506,
+            angles_deg: vec![0.0, 90.0, 180.0, 270.0],
+        },
+    };
+    let cables = (0..4).map(|k| CableSpec::through_hole(k, 0)).collect();
+    let robot = Robot::new(till_spec(Some(guides), cables)).unwrap();
+    let mut loads = sc.loads.clone();
+    loads.tensions_n[0] = 1.0;
+    let mut ws = Workspace::new(robot.clone(), loads.clone(), rk4(n)).unwrap();
+    assert!(ws.solve(Start::Cold).status.is_converged());
+    let c0 = ws.rhs_counts();
+    let ramp: Vec<f64> = (1..=60)
+        .chain((0..59).rev())
+        .map(|k| 1.0 + 0.2 * k as f64)
+        .collect();
+    for (k, &t) in ramp.iter().enumerate() {
+        loads.tensions_n[0] = t;
+        ws.set_loads(&loads).unwrap();
+        let rep = ws.solve(Start::Warm);
+        assert!(rep.status.is_converged(), "step {k}: {rep:?}");
+        if k % 15 == 7 {
+            let cold = solve_tip(robot.clone(), &loads, rk4(n));
+            let d = (ws.tip_position() - cold).norm();
+            assert!(
+                d < 2e-9,
+                "step {k} (T = {t} N): warm and cold tips {d:.3e} m apart"
+            );
+        }
+    }
+    let per_gap =
+        (ws.rhs_counts().local_iterations - c0.local_iterations) as f64 / (ramp.len() * n) as f64;
+    eprintln!("local iterations per gap per warm solve: {per_gap:.3}");
+    assert!(
+        per_gap <= 2.0,
+        "{per_gap:.3} re-integrations per gap per solve"
+    );
+}

@@ -679,6 +679,50 @@ fn transport_next<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &State<T>, g: u
     za.extend(buf.x.iter().chain(&buf.theta).map(|v| v.re()));
 }
 
+/// Condensed coupling: how many values [`local_next`] writes (3 per pending chord).
+pub(crate) fn local_next_len(plan: &Plan) -> usize {
+    if plan.condensed {
+        3 * plan.pending.iter().map(Vec::len).sum::<usize>()
+    } else {
+        0
+    }
+}
+
+/// Condensed coupling: the assumed next holes as last settled, each in the frame of
+/// the guide whose chord uses it (`q_local = R_g^T (q - r_g)`, guide by guide), into
+/// `out` (length [`local_next_len`]). The warm solve's load-path predictor
+/// extrapolates these with the unknowns (`workspace/predict.rs`).
+pub(crate) fn local_next(plan: &Plan, buf: &PassBuf<f64>, out: &mut [f64]) {
+    let mut o = 0;
+    for (g, pend) in plan.pending.iter().enumerate().filter(|_| plan.condensed) {
+        let (ra, rota) = buf.anchor[g];
+        for &(j, k) in pend {
+            let local = rota.transpose() * (buf.next[j][k] - ra);
+            out[o..o + 3].copy_from_slice(local.as_slice());
+            o += 3;
+        }
+    }
+}
+
+/// Condensed coupling: adopt predicted next holes `local` (as [`local_next`] writes
+/// them) for unknowns `z = [x; theta]`: the next pass carries them along with each
+/// guide's pose and predicts from `z` on (see `transport_next`).
+pub(crate) fn set_local_next(plan: &Plan, buf: &mut PassBuf<f64>, local: &[f64], x: &[f64]) {
+    let mut o = 0;
+    for (g, pend) in plan.pending.iter().enumerate().filter(|_| plan.condensed) {
+        let (ra, rota) = buf.anchor[g];
+        for &(j, k) in pend {
+            buf.next[j][k] = ra + rota * Vector3::new(local[o], local[o + 1], local[o + 2]);
+            o += 3;
+        }
+        if !pend.is_empty() {
+            let za = &mut buf.z_anchor[g];
+            za.clear();
+            za.extend(x.iter().chain(&buf.theta));
+        }
+    }
+}
+
 /// Dual pass at the disk after `g`, after the fold: `D = d q_local/dz` of the pending
 /// next holes in guide `g`'s frame (`yg`: the state at guide `g`), columns
 /// `sweep_c0..` of this pass's outer directions (see `dnext`).

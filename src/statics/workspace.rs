@@ -129,6 +129,9 @@ pub struct Workspace {
     use_broyden: bool,
     /// Warm solves: secant predictor from the last two solutions.
     secant: Secant,
+    /// The secant predictor's auxiliary values: the condensed coupling's settled next
+    /// holes in their guides' frames (`pass::local_next`).
+    holes_aux: Vec<f64>,
     b64: PassBuf<f64>,
     b3: PassBuf<Dual<3>>,
     b6: PassBuf<Dual<6>>,
@@ -207,7 +210,8 @@ impl Workspace {
             lu: DenseLu::new(n),
             broyden: Broyden::new(n),
             use_broyden: false,
-            secant: Secant::new(n),
+            secant: Secant::new(n, super::pass::local_next_len(&plan)),
+            holes_aux: vec![0.0; super::pass::local_next_len(&plan)],
             robot,
             loads,
             settings,
@@ -367,8 +371,16 @@ impl Workspace {
         // and an unobservable case changed status).
         let plain = self.plan.params.is_empty();
         let predict = plain && !(self.guarded() && intensity > CERTIFY_INTENSITY);
-        self.secant
-            .start(&mut self.x, &self.loads, &self.b64.theta, warm && predict);
+        let predicted = self.secant.start(
+            &mut self.x,
+            &mut self.holes_aux,
+            &self.loads,
+            &self.b64.theta,
+            warm && predict,
+        );
+        if predicted {
+            super::pass::set_local_next(&self.plan, &mut self.b64, &self.holes_aux, &self.x);
+        }
         if warm {
             self.x_start.copy_from_slice(&self.x);
             self.b64.local_tol = LOCAL_TOL;
@@ -414,8 +426,16 @@ impl Workspace {
             return rep;
         }
         self.has_solution = status.is_converged();
-        self.secant
-            .finish(self.has_solution, &self.x, &self.loads, &self.b64.theta);
+        if self.has_solution {
+            super::pass::local_next(&self.plan, &self.b64, &mut self.holes_aux);
+        }
+        self.secant.finish(
+            self.has_solution,
+            &self.x,
+            &self.holes_aux,
+            &self.loads,
+            &self.b64.theta,
+        );
         self.last_intensity = intensity;
         self.report = SolveReport {
             status,

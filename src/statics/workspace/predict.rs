@@ -11,6 +11,14 @@
 //! warm start) to 4e-7 (linear), 3e-10 (quadratic) and mostly below the 1e-10
 //! tolerance (cubic): most solves then take no Newton step at all.
 //!
+//! The same weights extrapolate an auxiliary vector kept with each solution: the
+//! condensed coupling's settled next holes in their guides' frames
+//! (`crate::statics::pass::local_next`). Those move with the loads directly (a tension
+//! step bends each disk gap), which the pass's own prediction from the change of the
+//! unknowns does not see; extrapolated along the load path, the first pass of a ramp
+//! step starts its local iterations 1e-13 L away instead of 1e-9..1e-6 L (Till's robot
+//! on 100 disks: 1.5 -> 0.5 gap re-integrations a gap, `examples/till_ramp_profile.rs`).
+//!
 //! It is used only when the unknowns are exactly the last solution (nothing moved
 //! them since, e.g. [`super::Workspace::set_theta_predicted`]'s own predictor) and the
 //! previous solve started warm from the solution before. Buffers are sized once
@@ -30,15 +38,18 @@ const PARALLEL_TOL: f64 = 1e-6;
 #[derive(Clone, Debug)]
 struct Point {
     x: Vec<f64>,
+    /// Auxiliary values extrapolated with `x` (see the module docs).
+    aux: Vec<f64>,
     loads: Loads,
     theta: Vec<f64>,
     valid: bool,
 }
 
 impl Point {
-    fn new(n: usize) -> Self {
+    fn new(n: usize, naux: usize) -> Self {
         Self {
             x: vec![0.0; n],
+            aux: vec![0.0; naux],
             loads: Loads::none(),
             theta: Vec::new(),
             valid: false,
@@ -63,22 +74,32 @@ pub(super) struct Secant {
 }
 
 impl Secant {
-    pub fn new(n: usize) -> Self {
+    /// `n` unknowns and `naux` auxiliary values per solution.
+    pub fn new(n: usize, naux: usize) -> Self {
         Self {
-            pts: std::array::from_fn(|_| Point::new(n)),
+            pts: std::array::from_fn(|_| Point::new(n, naux)),
             from_sol: false,
         }
     }
 
     /// Start of a solve that begins at `x` (warm) with `loads`, `theta`: moves `x` to
-    /// the prediction when it applies (`predict`) and returns whether it did.
+    /// the prediction when it applies (`predict`) and returns whether it did; `aux`
+    /// (the auxiliary values, length `naux`) is then extrapolated with the same
+    /// weights, else left alone.
     ///
     /// With `d = L1 - L0`, every kept solution `k` whose loads lie on the line
     /// `L1 + t_k d` (`t = 0` for `L1`, `-1` for `L0`) at a distinct `t_k` is a node of
     /// the Lagrange polynomial `x(t)`, evaluated at the new loads' `t = alpha`
     /// (linear with two nodes, quadratic with three, cubic with four: along a steady
     /// ramp the error drops by about one load step's ratio per node).
-    pub fn start(&mut self, x: &mut [f64], loads: &Loads, theta: &[f64], predict: bool) -> bool {
+    pub fn start(
+        &mut self,
+        x: &mut [f64],
+        aux: &mut [f64],
+        loads: &Loads,
+        theta: &[f64],
+        predict: bool,
+    ) -> bool {
         self.from_sol = self.pts[0].valid && self.pts[0].x == x;
         // the latest solution is consumed: it is noted again if this solve converges
         self.pts[0].valid = false;
@@ -115,11 +136,22 @@ impl Secant {
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = (0..nodes).map(|k| w[k] * self.pts[k].x[i]).sum();
         }
+        for (i, ai) in aux.iter_mut().enumerate() {
+            *ai = (0..nodes).map(|k| w[k] * self.pts[k].aux[i]).sum();
+        }
         true
     }
 
-    /// End of a solve: `x` solves `loads`, `theta` when `converged`.
-    pub fn finish(&mut self, converged: bool, x: &[f64], loads: &Loads, theta: &[f64]) {
+    /// End of a solve: `x` solves `loads`, `theta` when `converged` (`aux`: its
+    /// auxiliary values).
+    pub fn finish(
+        &mut self,
+        converged: bool,
+        x: &[f64],
+        aux: &[f64],
+        loads: &Loads,
+        theta: &[f64],
+    ) {
         if !converged {
             self.pts.iter_mut().for_each(|p| p.valid = false);
             return;
@@ -135,6 +167,7 @@ impl Secant {
         self.from_sol = false;
         let sol = &mut self.pts[0];
         sol.x.copy_from_slice(x);
+        sol.aux.copy_from_slice(aux);
         copy_loads(&mut sol.loads, loads);
         sol.theta.clear();
         sol.theta.extend_from_slice(theta);
@@ -223,11 +256,11 @@ mod tests {
     #[test]
     fn quadratic_path_is_extrapolated_exactly() {
         let xs = |t: f64| [1.0 + 0.5 * t - 0.3 * t * t, 2.0 * t * t];
-        let mut s = Secant::new(2);
+        let mut s = Secant::new(2, 0);
         let ts = [1.0, 1.1, 1.2, 1.3, 1.2, 1.1, 0.9];
         for (k, &t) in ts.iter().enumerate() {
             let mut x = if k == 0 { xs(t) } else { xs(ts[k - 1]) };
-            let predicted = s.start(&mut x, &loads(t), &[], true);
+            let predicted = s.start(&mut x, &mut [], &loads(t), &[], true);
             assert_eq!(predicted, k >= 2, "step {k}");
             if k >= 3 && k != 5 {
                 // k = 5: the last loads are 1.2, 1.3, 1.2 (two equal): linear only
@@ -237,7 +270,7 @@ mod tests {
                     "{k} {x:?} {e:?}"
                 );
             }
-            s.finish(true, &xs(t), &loads(t), &[]);
+            s.finish(true, &xs(t), &[], &loads(t), &[]);
         }
     }
 
@@ -246,31 +279,34 @@ mod tests {
     #[test]
     fn linear_path_is_extrapolated_exactly_and_turns_are_not() {
         let xs = |t: f64| [1.0 + 0.5 * t, -2.0 * t];
-        let mut s = Secant::new(2);
+        let mut s = Secant::new(2, 0);
         let mut x = xs(1.0);
-        assert!(!s.start(&mut x, &loads(1.0), &[], true));
-        s.finish(true, &x, &loads(1.0), &[]);
+        assert!(!s.start(&mut x, &mut [], &loads(1.0), &[], true));
+        s.finish(true, &x, &[], &loads(1.0), &[]);
         let mut x = xs(1.0);
-        assert!(!s.start(&mut x, &loads(1.5), &[], true), "one point only");
+        assert!(
+            !s.start(&mut x, &mut [], &loads(1.5), &[], true),
+            "one point only"
+        );
         let x = xs(1.5);
-        s.finish(true, &x, &loads(1.5), &[]);
+        s.finish(true, &x, &[], &loads(1.5), &[]);
         let mut x = xs(1.5);
-        assert!(s.start(&mut x, &loads(1.2), &[], true));
+        assert!(s.start(&mut x, &mut [], &loads(1.2), &[], true));
         let e = xs(1.2);
         assert!(
             (x[0] - e[0]).abs() < 1e-15 && (x[1] - e[1]).abs() < 1e-15,
             "{x:?}"
         );
-        s.finish(true, &e, &loads(1.2), &[]);
+        s.finish(true, &e, &[], &loads(1.2), &[]);
         // a second cable's tension: not along the last step
         let mut x = e;
         let mut turn = loads(1.2);
         turn.tensions_n[1] = 0.3;
-        assert!(!s.start(&mut x, &turn, &[], true));
+        assert!(!s.start(&mut x, &mut [], &turn, &[], true));
         assert_eq!(x, e);
         // unknowns moved since the solve (another predictor): left alone
-        s.finish(true, &e, &loads(1.2), &[]);
+        s.finish(true, &e, &[], &loads(1.2), &[]);
         let mut x = [e[0] + 1e-3, e[1]];
-        assert!(!s.start(&mut x, &loads(1.0), &[], true));
+        assert!(!s.start(&mut x, &mut [], &loads(1.0), &[], true));
     }
 }
