@@ -608,23 +608,108 @@ fn estimator_recovers_a_tip_force_from_continuous_tendon_lengths() {
     }
 }
 
-/// The curvature rungs model cables as chords between disks: a robot with a
-/// continuous tendon is refused by CC and PCC with the cable's field named, and
-/// solved by the rod rung.
+/// The curvature rungs on straight continuous tendons (`ladder::reject_continuous`).
+/// Without gravity a straight tendon at radius `r` with tension `T` bends its section
+/// into one arc of curvature `k = T r / EI` (Kirchhoff, no extension): the CC and
+/// PCC tips equal `(1/k)(1 - cos kL), 0, (1/k) sin kL` rotated to the tendon's side,
+/// and the tendon lengths are `L (1 -+ k r)` for the pulled and the opposite one
+/// (1e-12 m: both rungs are exact there). Their length sensitivities to the tension
+/// equal central differences (1e-7 relative, step 1e-3 N); with gravity, PCC
+/// approaches the Kirchhoff rod rung at second order in the piece length (ratio of
+/// the errors at 8 and 16 pieces per section within 4 +- 0.6, 32 pieces within 10 um).
+/// A helical path is refused by both with the cable's field named.
 #[test]
-fn curvature_rungs_refuse_continuous_tendons() {
+fn curvature_rungs_take_straight_continuous_tendons() {
     use cablesense::ladder::{
-        CcSettings, ConstantCurvature, PccSettings, PiecewiseConstantCurvature,
+        CcSettings, ConstantCurvature, Differentiable, ForwardModel, PccSettings,
+        PiecewiseConstantCurvature,
     };
-    let robot = till().build_robot().unwrap();
-    let e = ConstantCurvature::new(robot.clone(), CcSettings::default())
+    let sc = till();
+    let robot = sc.build_robot().unwrap();
+    let mut loads = sc.loads.clone();
+    loads.gravity_m_s2 = [0.0; 3];
+    let (t, r, len) = (15.0, 0.01506, 0.5);
+    let ei = 200e9 * std::f64::consts::PI * 1e-12 / 4.0;
+    let k = t * r / ei;
+    // the tendon at angle 0 (+x) pulls the tip towards +x
+    let exact = Vector3::new((1.0 - (k * len).cos()) / k, 0.0, (k * len).sin() / k);
+    let pcc = |n: usize| PccSettings {
+        pieces_per_section: n,
+        ..PccSettings::default()
+    };
+    let mut cc = ConstantCurvature::new(robot.clone(), CcSettings::default()).unwrap();
+    let mut pc = PiecewiseConstantCurvature::new(robot.clone(), pcc(8)).unwrap();
+    let models: [&mut dyn Differentiable; 2] = [&mut cc, &mut pc];
+    for m in models {
+        assert!(m.solve(&loads, Start::Cold).unwrap().status.is_converged());
+        let tip = m.tip_position();
+        assert!((tip - exact).norm() < 1e-12, "{tip:?} vs {exact:?}");
+        let mut l = [0.0; 4];
+        m.cable_lengths_into(&mut l);
+        let want = [len * (1.0 - k * r), len, len * (1.0 + k * r), len];
+        for (a, b) in l.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12, "lengths {l:?} vs {want:?}");
+        }
+        // d l / d T against central differences
+        let sites = [ParamSite::Tension { cable: 0 }];
+        let (mut d, mut l0) = ([0.0; 4], [0.0; 4]);
+        m.solve_params(&loads, &sites, &[0.0], Start::Cold).unwrap();
+        assert!(m.length_sensitivities(&sites, &mut d, &mut l0));
+        let h = 1e-3;
+        let mut fd = [[0.0; 4]; 2];
+        for (i, sgn) in [1.0, -1.0].into_iter().enumerate() {
+            m.solve_params(&loads, &sites, &[sgn * h], Start::Cold)
+                .unwrap();
+            m.cable_lengths_into(&mut fd[i]);
+        }
+        for j in 0..4 {
+            let c = (fd[0][j] - fd[1][j]) / (2.0 * h);
+            assert!(
+                (d[j] - c).abs() <= 1e-7 * c.abs().max(1e-6),
+                "cable {j}: {} vs {c}",
+                d[j]
+            );
+        }
+    }
+    // with gravity: PCC against the Kirchhoff rod rung
+    let rod = solve_tip(
+        robot.clone(),
+        &sc.loads,
+        SolverSettings {
+            rod_model: RodModel::Kirchhoff,
+            ..rk4(512)
+        },
+    );
+    let err = |n: usize| {
+        let mut m = PiecewiseConstantCurvature::new(robot.clone(), pcc(n)).unwrap();
+        assert!(m
+            .solve(&sc.loads, Start::Cold)
+            .unwrap()
+            .status
+            .is_converged());
+        (m.tip_position() - rod).norm()
+    };
+    let (e8, e16, e32) = (err(8), err(16), err(32));
+    eprintln!("PCC vs Kirchhoff rod with gravity: {e8:.3e} {e16:.3e} {e32:.3e} m");
+    assert!(
+        (e8 / e16 - 4.0).abs() < 0.6 && e32 < 1e-5,
+        "{e8} {e16} {e32}"
+    );
+    // a helical path is refused, naming the cable
+    let text = std::fs::read_to_string(TILL).unwrap().replacen(
+        "path = { straight = { radius_m = 0.01506, angle_deg = 90.0 } }",
+        "path = { helical = { radius_m = 0.01506, start_angle_deg = 90.0, pitch_m_per_turn = 0.5 } }",
+        1,
+    );
+    let helical = Scene::from_toml_str(&text).unwrap().build_robot().unwrap();
+    let e = ConstantCurvature::new(helical.clone(), CcSettings::default())
         .err()
         .unwrap();
-    assert!(e.to_string().contains("robot.cables[0].routing"), "{e}");
-    let e = PiecewiseConstantCurvature::new(robot, PccSettings::default())
+    assert!(e.to_string().contains("robot.cables[1].routing"), "{e}");
+    let e = PiecewiseConstantCurvature::new(helical, PccSettings::default())
         .err()
         .unwrap();
-    assert!(e.to_string().contains("continuous routing"), "{e}");
+    assert!(e.to_string().contains("helical"), "{e}");
 }
 
 /// Till's robot with its continuous tendons driven by displacement is refused with

@@ -154,20 +154,37 @@ fn tdcr_readings_sweep() {
     assert!(r.iter().all(|r| r.tick_s.is_nan() && r.est_err.is_nan()));
 }
 
-/// Till's tendon robot (`data/scenes/till_tendon_robot.toml`, four continuously routed
-/// tendons): the default ladder leaves out CC and PCC (they model tendons as chords
-/// between disks; `ladder::reject_continuous`), every rod rung converges on the whole
-/// load sweep, and the finest (Cosserat, adaptive 1e-10) is within 1e-9 m of the
-/// reference (Cosserat, adaptive 1e-12: the same model at a tighter tolerance; measured
-/// 9.1e-12 m with `cablesense pareto`); the estimator ticks run on continuous routing.
+/// Till's tendon robot (`data/scenes/till_tendon_robot.toml`, four straight
+/// continuously routed tendons): the default ladder keeps CC and PCC (a straight path
+/// is the dense-disk limit; `ladder::reject_continuous`), every rung converges on the
+/// whole load sweep, CC misses by millimetres (it ignores the rod's weight: gravity
+/// bends this steel rod), and the finest rod rung (Cosserat, adaptive 1e-10) is
+/// within 1e-9 m of the reference (Cosserat, adaptive 1e-12: the same model at a
+/// tighter tolerance; measured 9.1e-12 m with `cablesense pareto`); the estimator
+/// ticks run on continuous routing. With a helical tendon the ladders keep the rod
+/// rungs only (18).
 #[test]
 fn continuous_routing_is_ranked_on_the_rod_rungs() {
     let sc = Scene::load("data/scenes/till_tendon_robot.toml").unwrap();
     let robot = sc.build_robot().unwrap();
     let ladder = cablesense::ladder::full_ladder(&robot);
-    assert!(ladder.iter().all(|r| matches!(r, Rung::Rod(_))));
-    assert_eq!(ladder.len(), 18, "2 rod models x 9 integrators, no disks");
-    assert!(cablesense::ladder::auto_ladder(&robot)
+    assert_eq!(
+        ladder.len(),
+        23,
+        "CC, PCC x 4, 2 rod models x 9 integrators"
+    );
+    let text = std::fs::read_to_string("data/scenes/till_tendon_robot.toml")
+        .unwrap()
+        .replacen(
+            "path = { straight = { radius_m = 0.01506, angle_deg = 90.0 } }",
+            "path = { helical = { radius_m = 0.01506, start_angle_deg = 90.0, pitch_m_per_turn = 0.5 } }",
+            1,
+        );
+    let helical = Scene::from_toml_str(&text).unwrap().build_robot().unwrap();
+    let rods = cablesense::ladder::full_ladder(&helical);
+    assert!(rods.iter().all(|r| matches!(r, Rung::Rod(_))));
+    assert_eq!(rods.len(), 18, "2 rod models x 9 integrators, no disks");
+    assert!(cablesense::ladder::auto_ladder(&helical)
         .iter()
         .all(|r| matches!(r, Rung::Rod(_))));
     let s = ParetoSettings {
@@ -175,9 +192,11 @@ fn continuous_routing_is_ranked_on_the_rod_rungs() {
         estimator: true,
         rungs: None,
     };
-    assert_eq!(pareto::rung_count(&robot, &s), 18);
+    assert_eq!(pareto::rung_count(&robot, &s), 23);
     let res = pareto::run_scene("till", &sc, None, &s, &mut |_| {}).unwrap();
-    assert_eq!(res.rows.len(), 18);
+    assert_eq!(res.rows.len(), 23);
+    let cc = res.rows.iter().find(|r| r.rung.label() == "cc").unwrap();
+    assert!(cc.tip_err > 1e-3 && cc.tip_err < 0.2, "cc {}", cc.tip_err);
     assert!(res
         .rows
         .iter()

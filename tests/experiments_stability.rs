@@ -108,9 +108,9 @@ fn tdcr_readings_map() {
     }
 }
 
-/// The forward settings of the map drop the curvature rungs on a robot with
-/// continuously routed tendons (Till's robot) and keep them on a disk-routed one
-/// (the track demo); the full map of Till's robot is `cablesense stability
+/// The forward settings of the map drop the curvature rungs on a robot with a
+/// helical continuous tendon and keep them on straight continuous tendons (Till's
+/// robot) and on a disk-routed robot (the track demo); the full map of Till's robot is `cablesense stability
 /// data/scenes/till_tendon_robot.toml` (measured: every rod setting converged in
 /// every direction up to the last magnitude mapped, 460 s on a busy machine).
 #[test]
@@ -123,9 +123,18 @@ fn continuous_routing_maps_the_rod_settings() {
         .unwrap()
         .build_robot()
         .unwrap();
-    let on_till = stability::forward_settings(&till);
-    assert_eq!(on_till.len(), 6);
-    assert!(on_till
+    assert_eq!(stability::forward_settings(&till).len(), 8);
+    let text = std::fs::read_to_string("data/scenes/till_tendon_robot.toml")
+        .unwrap()
+        .replacen(
+            "path = { straight = { radius_m = 0.01506, angle_deg = 0.0 } }",
+            "path = { helical = { radius_m = 0.01506, start_angle_deg = 0.0, pitch_m_per_turn = 0.5 } }",
+            1,
+        );
+    let helical = Scene::from_toml_str(&text).unwrap().build_robot().unwrap();
+    let on_helical = stability::forward_settings(&helical);
+    assert_eq!(on_helical.len(), 6);
+    assert!(on_helical
         .iter()
         .all(|r| matches!(r, cablesense::ladder::Rung::Rod(_))));
     assert_eq!(stability::forward_settings(&demo).len(), 8);

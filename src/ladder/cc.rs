@@ -16,6 +16,12 @@
 //!   varying moment over a straight section). This is an extension of the classical
 //!   CC model; forces make `m_k` depend on the shape, found by a fixed point.
 //!
+//! A tendon on a straight continuous path at offset `d` (`routing = "continuous"`)
+//! gives the same moment `T_j (e3 x d)` on every section it spans (the limit of dense
+//! disks), and its length is the path's arc length over the arcs,
+//! `sum_k L_k |e3 + u_k x d|` (`super::reject_continuous` says why helical and
+//! tabulated paths are refused).
+//!
 //! Ignored: gravity on the rod and on the disks, the cable's chord geometry between
 //! disks, shear and extension. Exact (to round-off) only for bending torques without
 //! gravity or forces: then `m(s)` is constant in the body frame and the Cosserat
@@ -93,6 +99,8 @@ struct Layout {
     arms: Vec<Vec<Vector3<f64>>>,
     /// Base-plate holes (world).
     base_holes: Vec<Vector3<f64>>,
+    /// Offset of each cable on a straight continuous path (`None`: disk-routed).
+    straight: Vec<Option<Vector3<f64>>>,
 }
 
 /// The state a sweep reads and writes, over `f64` (solver) or dual numbers
@@ -106,6 +114,8 @@ struct Buf<T: Real> {
     ends: Vec<PoseT<T>>,
     guides: Vec<PoseT<T>>,
     hole_pts: Vec<Vec<Vector3<T>>>,
+    /// Length of each straight continuous path (zero for disk-routed cables).
+    continuous: Vec<T>,
     loads: LoadsT<T>,
 }
 
@@ -128,6 +138,7 @@ impl<T: Real> Buf<T> {
                 .iter()
                 .map(|c| vec![Vector3::zeros(); c.route.len()])
                 .collect(),
+            continuous: vec![T::zero(); robot.cables().len()],
             loads: LoadsT::new(robot.cables().len()),
         }
     }
@@ -205,6 +216,14 @@ impl Layout {
                 b.hole_pts[j][i] = pose.position + pose.rotation * hole;
             }
         }
+        for (j, d) in self.straight.iter().enumerate() {
+            if let Some(d) = d {
+                let end = self.robot.cables()[j].end_section;
+                b.continuous[j] = (0..=end)
+                    .map(|k| super::straight_arc_length(&b.u[k], d, secs[k].length))
+                    .fold(T::zero(), |a, l| a + l);
+            }
+        }
     }
 }
 
@@ -236,6 +255,9 @@ impl ConstantCurvature {
             .map(|c| {
                 (0..ns)
                     .map(|k| {
+                        if let Some(crate::robot::TendonPath::Straight(d)) = c.path {
+                            return Vector3::z().cross(&d);
+                        }
                         // the cable's hole on this section's first disk; a section without
                         // disks uses the nearest disk before it (or the base plate)
                         let on = c.route.iter().position(|&g| robot.guides()[g].section == k);
@@ -254,6 +276,7 @@ impl ConstantCurvature {
             .iter()
             .map(|c| robot.base_position() + robot.base_rotation() * c.base_hole)
             .collect();
+        let straight = super::straight_offsets(&robot);
         Ok(Self {
             b: Buf::new(&robot),
             f: vec![Vector3::zeros(); ns],
@@ -270,6 +293,7 @@ impl ConstantCurvature {
                 robot,
                 arms,
                 base_holes,
+                straight,
             },
             settings,
         })
@@ -283,7 +307,8 @@ impl ConstantCurvature {
     fn finish(&mut self) {
         self.layout.shape(&mut self.b);
         for (j, l) in self.lengths.iter_mut().enumerate() {
-            *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
+            *l =
+                path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]) + self.b.continuous[j];
         }
     }
 
@@ -424,7 +449,8 @@ impl ConstantCurvature {
             }
             self.layout.sweep(bd);
             self.layout.shape(bd);
-            imp.record_sweep(c0, &bd.u_new, &self.layout.base_holes, &bd.hole_pts);
+            let (holes, cont) = (&bd.hole_pts, &bd.continuous);
+            imp.record_sweep(c0, &bd.u_new, &self.layout.base_holes, holes, cont);
         }
         for (l, v) in lengths.iter_mut().zip(&self.lengths) {
             *l = *v;

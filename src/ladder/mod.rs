@@ -404,26 +404,63 @@ pub(crate) fn add_params(
     Ok(())
 }
 
-/// The curvature rungs (CC, PCC) model cables as chords between disk holes; a
-/// continuously routed tendon (`statics::continuous`) is rejected, naming the cable.
-/// Where it would fit: a straight continuous tendon alone keeps its section's
-/// curvature exactly constant without other loads (its tangent stays along the
-/// backbone, so the rod carries the constant moment `tau r x e3`:
-/// `tests/continuous_routing.rs`, `straight_tendon_without_gravity_is_an_exact_arc`);
-/// a helical or tabulated path does not (`r(s)` turns, and the tendon's moment and
-/// distributed force turn with it), so no CC rung can represent it.
+/// The curvature rungs (CC, PCC) take a continuously routed tendon
+/// (`statics::continuous`) only on a straight path, and reject a helical or
+/// tabulated one, naming the cable.
+///
+/// Why straight paths fit: a straight tendon at the constant offset `d` keeps its
+/// section's curvature exactly constant without other loads (its tangent stays along
+/// the backbone, so the rod carries the constant moment `T e3 x d`, the same as a
+/// cable through dense disks at the hole `d`; `tests/continuous_routing.rs`,
+/// `straight_tendon_without_gravity_is_an_exact_arc`). CC uses that moment per section
+/// and PCC the exact free-body term at each piece's midpoint (module `pcc`); the
+/// length is the path's arc length over the arcs, `sum h |e3 + u x d|`. A helical or
+/// tabulated path does not keep it constant (`r(s)` turns, and the tendon's moment
+/// and distributed force turn with it), so no CC rung can represent it.
 ///
 /// The ladders ([`full_ladder`], [`auto_ladder`], [`readings_ladder`]) leave the
-/// curvature rungs out on such a robot, so `pareto`, `stability` and `--model auto`
-/// rank the rod rungs only.
+/// curvature rungs out on a robot with such a tendon, so `pareto`, `stability` and
+/// `--model auto` rank the rod rungs only there.
 pub fn reject_continuous(robot: &Robot) -> Result<(), LadderError> {
-    match robot.cables().iter().position(|c| c.path.is_some()) {
+    use crate::robot::TendonPath;
+    match robot
+        .cables()
+        .iter()
+        .position(|c| matches!(c.path, Some(ref p) if !matches!(p, TendonPath::Straight(_))))
+    {
         Some(j) => Err(LadderError::Model(ModelError::Invalid {
             field: format!("robot.cables[{j}].routing"),
-            why: "continuous routing is solved by the rod rungs only (the curvature rungs model cables as chords between disks)".into(),
+            why: "a helical or tabulated continuous path is solved by the rod rungs only (it does not keep a section's curvature constant; straight paths are taken)".into(),
         })),
         None => Ok(()),
     }
+}
+
+/// Offset `d` (local, m) of each cable on a straight continuous path, `None` for
+/// disk-routed cables (the curvature rungs' view of [`crate::robot::TendonPath`]).
+pub(crate) fn straight_offsets(robot: &Robot) -> Vec<Option<Vector3<f64>>> {
+    use crate::robot::TendonPath;
+    robot
+        .cables()
+        .iter()
+        .map(|c| match c.path {
+            Some(TendonPath::Straight(d)) => Some(d),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Length of a straight continuous path at offset `d` over an arc of curvature `u`
+/// (local) and length `h`: the path's tangent is `R (e3 + u x d)` (Kirchhoff: no
+/// shear or extension), of constant norm on the arc.
+#[inline]
+pub(crate) fn straight_arc_length<T: crate::math::Real>(
+    u: &Vector3<T>,
+    d: &Vector3<f64>,
+    h: f64,
+) -> T {
+    let t = Vector3::z().map(T::cst) + u.cross(&d.map(T::cst));
+    t.dot(&t).sqrt().scale(h)
 }
 
 /// `loads` with point loads (forces, torques, payload masses) and cable tensions

@@ -25,6 +25,15 @@
 //!    the largest change grows from one sweep to the next (the plain map oscillates and
 //!    diverges for heavy loads).
 //!
+//! A tendon on a straight continuous path at offset `d` (`routing = "continuous"`)
+//! adds, at each midpoint of a piece it spans, its exact free-body term: cut there,
+//! the distal part's tendon pulls back along its own tangent `t` at its point
+//! `r + R d`, so the local moment gains `d x (-T t)` with `t = unit(e3 + u x d)`
+//! (Rucker & Webster 2011's frictionless tendon; `T e3 x d` without torsion, as for a
+//! cable through dense disks); nothing is carried along the walk, since the tendon's
+//! termination force is internal to rod plus tendon. Its length is
+//! `sum h |e3 + u x d|` over the pieces it spans.
+//!
 //! Converged when `max |u_new - u| L < tolerance`. A cold start under a load that
 //! bends the straight rod by more than 2 rad in its first sweep ramps the loads
 //! (gravity, point loads, tensions together) up in steps of about 2 rad of bending,
@@ -150,6 +159,8 @@ struct Layout {
     guide_cables: Vec<Vec<(usize, usize)>>,
     base_holes: Vec<Vector3<f64>>,
     section_ends: Vec<usize>,
+    /// Offset of each cable on a straight continuous path (`None`: disk-routed).
+    straight: Vec<Option<Vector3<f64>>>,
 }
 
 /// The state a sweep reads and writes, over `f64` (solver) or dual numbers
@@ -162,6 +173,8 @@ struct Buf<T: Real> {
     mid: Vec<PoseT<T>>,
     quarter: Vec<Vector3<T>>,
     hole_pts: Vec<Vec<Vector3<T>>>,
+    /// Length of each straight continuous path (zero for disk-routed cables).
+    continuous: Vec<T>,
     loads: LoadsT<T>,
 }
 
@@ -187,6 +200,7 @@ impl<T: Real> Buf<T> {
                 .iter()
                 .map(|c| vec![Vector3::zeros(); c.route.len()])
                 .collect(),
+            continuous: vec![T::zero(); l.robot.cables().len()],
             loads: LoadsT::new(l.robot.cables().len()),
         }
     }
@@ -306,7 +320,8 @@ impl PiecewiseConstantCurvature {
         }
         self.layout.kinematics(&mut self.b);
         for (j, l) in self.lengths.iter_mut().enumerate() {
-            *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
+            *l =
+                path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]) + self.b.continuous[j];
         }
         self.report = LadderReport {
             status: SolveStatus::Converged,
@@ -374,7 +389,8 @@ impl PiecewiseConstantCurvature {
         }
         self.layout.kinematics(&mut self.b);
         for (j, l) in self.lengths.iter_mut().enumerate() {
-            *l = path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]);
+            *l =
+                path_length(&self.layout.base_holes[j], &self.b.hole_pts[j]) + self.b.continuous[j];
         }
         self.report = LadderReport {
             status,
@@ -415,7 +431,8 @@ impl PiecewiseConstantCurvature {
             }
             self.layout.kinematics(bd);
             self.layout.moments(bd, 1.0);
-            imp.record_sweep(c0, &bd.u_new, &self.layout.base_holes, &bd.hole_pts);
+            let (holes, cont) = (&bd.hole_pts, &bd.continuous);
+            imp.record_sweep(c0, &bd.u_new, &self.layout.base_holes, holes, cont);
         }
         for (l, v) in lengths.iter_mut().zip(&self.lengths) {
             *l = *v;

@@ -161,13 +161,15 @@ impl Implicit {
 
     /// Record one dual sweep seeded at columns `c0..`: the new curvatures `u_new`
     /// into the rows of `Phi`, the cable lengths from `base_holes` through the route
-    /// holes `hole_pts` into the rows of `l`.
+    /// holes `hole_pts`, plus `continuous` (the lengths of straight continuous paths,
+    /// zero for disk-routed cables), into the rows of `l`.
     pub fn record_sweep(
         &mut self,
         c0: usize,
         u_new: &[Vector3<D6>],
         base_holes: &[Vector3<f64>],
         hole_pts: &[Vec<Vector3<D6>>],
+        continuous: &[D6],
     ) {
         let w = self.width();
         for (i, u) in u_new.iter().enumerate() {
@@ -177,7 +179,8 @@ impl Implicit {
         }
         for (j, pts) in hole_pts.iter().enumerate() {
             let base = base_holes[j].map(D6::constant);
-            scatter(&mut self.len, w, j, &path_length_t(&base, pts), c0);
+            let l = path_length_t(&base, pts) + continuous[j];
+            scatter(&mut self.len, w, j, &l, c0);
         }
     }
 

@@ -99,6 +99,7 @@ impl Layout {
             }
         }
         Layout {
+            straight: crate::ladder::straight_offsets(&robot),
             base_holes: robot
                 .cables()
                 .iter()

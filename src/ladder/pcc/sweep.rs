@@ -24,6 +24,18 @@ impl Layout {
                 b.hole_pts[j][k] = pose.position + pose.rotation * hole;
             }
         }
+        for (j, d) in self.straight.iter().enumerate() {
+            if let Some(d) = d {
+                let end = self.robot.cables()[j].end_section;
+                b.continuous[j] = self
+                    .pieces
+                    .iter()
+                    .zip(&b.u)
+                    .filter(|(p, _)| p.section <= end)
+                    .map(|(p, u)| crate::ladder::straight_arc_length(u, d, p.h))
+                    .fold(T::zero(), |a, l| a + l);
+            }
+        }
     }
 
     /// Steps 2-3: new curvatures into `b.u_new` at load scale `lam`; returns the
@@ -92,7 +104,23 @@ impl Layout {
             let c_half = (rm + b.quarter[i].map(|x| x.scale(4.0)) + rb).map(|x| x.scale(1.0 / 6.0));
             let m_mid = m + (rb - rm).cross(&n) + (c_half - rm).cross(&w.map(|x| x.scale(0.5)));
             let sec = &secs[piece.section];
-            let ml = b.mid[i].rotation.transpose() * m_mid;
+            let mut ml = b.mid[i].rotation.transpose() * m_mid;
+            // straight continuous tendons spanning this piece: the free-body term at
+            // the midpoint (module docs of `super`)
+            for (j, d) in self.straight.iter().enumerate() {
+                let t = b.loads.tensions[j].scale(lam);
+                match d {
+                    Some(d)
+                        if self.robot.cables()[j].end_section >= piece.section
+                            && t != T::zero() =>
+                    {
+                        let dt = d.map(T::cst);
+                        let tl = unit_t(Vector3::z().map(T::cst) + b.u[i].cross(&dt));
+                        ml += dt.cross(&(tl * (-t)));
+                    }
+                    _ => {}
+                }
+            }
             let stiff = &sec.stiffness.bend_twist;
             let pre = &sec.precurvature;
             let u = Vector3::from_fn(|a, _| ml[a].scale(1.0 / stiff[a]) + T::cst(pre[a]));
