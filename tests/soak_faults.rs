@@ -27,7 +27,7 @@
 //!
 //! In CI: 20 000 cable-delta rows (track demo) and 300 servo-reading rows (the
 //! two-segment TDCR, 10 faults: every kind at least once). The full million-row
-//! cable-delta soak is `#[ignore]`d:
+//! soaks (cable deltas, servo readings) are `#[ignore]`d:
 //! `cargo test --release --test soak_faults -- --ignored --nocapture`
 //! (figures logged in `benches/README.md`).
 
@@ -429,15 +429,32 @@ fn servo_rows(n: usize) -> Vec<Vec<f64>> {
         .collect()
 }
 
-#[test]
-fn servo_readings_300_rows_with_faults() {
-    let stream = Stream {
+fn servo_stream(n: usize) -> Stream {
+    Stream {
         header: "t_s,s1a,s1b,s1c,s2a,s2b,s2c".into(),
-        rows: servo_rows(300),
+        rows: servo_rows(n),
         // 3 cm on one tendon of a 0.1 m segment with 8 mm holes (3.75 rad of bending)
         far: vec![0.03, 0.0, 0.0, 0.0, 0.0, 0.0],
         jump: 8e-3,
-    };
+    }
+}
+
+/// The full servo-readings soak (a million rows, 1 % faults in turn):
+/// `cargo test --release --test soak_faults servo_readings_million -- --ignored --nocapture`.
+#[test]
+#[ignore = "a million tendon rows: about an hour of one core; figures in benches/README.md"]
+fn servo_readings_million_rows_with_faults() {
+    soak(
+        "data/scenes/tdcr_two_segment.toml",
+        &servo_stream(1_000_000),
+        0.01,
+        None,
+    );
+}
+
+#[test]
+fn servo_readings_300_rows_with_faults() {
+    let stream = servo_stream(300);
     // every kind at least once (10 faults in 300 rows, 3 %: at 1 % three rows would
     // not cover the kinds)
     let at: Vec<usize> = (1..=10).map(|k| 29 * k).collect();
