@@ -7,29 +7,21 @@
 //! not yet integrated, disk). Residuals: `m(L+)/M` (and `n(L+)/F`), plus computed
 //! minus assumed hole positions `/L`. `F = EI/L^2`, `M = EI/L`.
 //!
-//! With the condensed coupling ([`crate::settings::CableCoupling::Condensed`]) the
-//! hole positions are not unknowns: at each disk the assumed next-hole positions
-//! `q` of the tensioned cables are solved inside the pass so that the next disk's
-//! computed holes `p(q)` equal them. An `f64` pass iterates the segment,
-//! `q <- q + M (p(q) - q)` with `M = (I - dp/dq)^-1` from the last dual sweep (the
-//! plain fixed point `M = I` before any sweep; the map contracts by roughly
-//! `T (h^2/6 + rho h/2) / EI` for chord `h` and hole radius `rho`). A dual pass does not
-//! iterate. The assumed holes act on the rod only through the jump `j` of `(n, m)`
-//! at their disk, `dj = B dq` (`B`, 6 x 3k, from the chord directions), so the pass
-//! seeds six local directions on that jump and reads `a = dp/dz` (outer directions)
-//! and `C = dp/dj` at the next disk. The consistent `dq = a dz + C B dq` gives the
-//! jump's derivative `dj/dz = (I - B C)^-1 B a` (push-through identity: a 6 x 6
-//! solve whatever the number `k` of cables), which is folded into the outer
-//! directions (the implicit function theorem for the segment), so the outer
-//! derivatives are exact; `M = I + C (I - B C)^-1 B` (Woodbury) is handed to the
-//! `f64` passes.
+//! With the condensed coupling the hole positions are not unknowns: they are solved
+//! inside the pass (module `condensed`).
+
+mod condensed;
+mod small;
 
 use super::continuous;
 use super::plan::{Event, ParamSite, Plan, JUMP_DIRS};
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
 use crate::math::Real;
+use condensed::{fold_segment, jump_block, seed_jump, settle_segment, store_dnext, transport_next};
+pub(crate) use condensed::{local_next, local_next_len, set_local_next};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
+use small::det_small;
 
 /// A rigid pose: position and orientation in the world frame.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -188,13 +180,10 @@ pub(crate) enum PassError {
 
 /// Condensed coupling: a segment's next holes must agree to this fraction of the rod
 /// length once the outer iteration is close (see [`PassBuf::local_tol`]), or stop
-/// improving below [`LOCAL_FLOOR`]. The boundary residual moves by about
+/// improving below `condensed::LOCAL_FLOOR`. The boundary residual moves by about
 /// `T L^2 / (EI h)` times a scaled hole error (~100-1000 on the shipped rods), so the
 /// outer tolerance of 1e-10..1e-11 needs hole errors near round-off.
 pub(crate) const LOCAL_TOL: f64 = 1e-15;
-/// Condensed coupling: a segment whose hole error is below this fraction of the rod
-/// length and no longer halves per iteration has reached round-off.
-const LOCAL_FLOOR: f64 = 1e-13;
 /// Condensed coupling: segment re-integrations allowed per disk.
 const MAX_LOCAL_ITERATIONS: usize = 60;
 
@@ -633,324 +622,6 @@ fn apply_event<T: Real>(
     }
 }
 
-/// Computed position of hole `k + 1` of cable `j` at the current disk.
-#[inline]
-fn next_hole<T: Real>(plan: &Plan, y: &State<T>, j: usize, k: usize) -> Vector3<T> {
-    y.r + y.rot * v3::<T>(&plan.cables[j].hole_local[k + 1])
-}
-
-/// `f64` pass reaching guide `g`: move the assumed next holes rigidly with the disk
-/// from where they were last settled (`q <- r + R R_a^T (q - r_a)`), so that only
-/// the segment's change of shape is left for the local iteration; with a sweep's
-/// `D = d q_local/dz` (`dnext`), that change is predicted too, to first order in the
-/// change of the outer unknowns since the last settle:
-/// `q <- r + R (R_a^T (q - r_a) + D (z - z_a))`. The local iteration then starts
-/// from an error second order in that change (plus `D`'s own staleness) instead of
-/// first order, and needs fewer re-integrations of the segment.
-fn transport_next<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &State<T>, g: usize) {
-    let (r, rot) = (y.r.map(|x| x.re()), y.rot.map(|x| x.re()));
-    let (ra, rota) = buf.anchor[g];
-    let n = buf.x.len();
-    let w = n + buf.theta.len();
-    let za = &buf.z_anchor[g];
-    let predict = buf.dnext_valid && za.len() == w;
-    for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
-        let q = &mut buf.next[j][k];
-        let mut local = rota.transpose() * (*q - ra);
-        if predict {
-            let d = &buf.dnext[g];
-            for a in 0..3 {
-                let row = &d[(3 * i + a) * w..(3 * i + a + 1) * w];
-                let mut dq = 0.0;
-                for c in 0..n {
-                    dq += row[c] * (buf.x[c].re() - za[c]);
-                }
-                for c in n..w {
-                    dq += row[c] * (buf.theta[c - n].re() - za[c]);
-                }
-                local[a] += dq;
-            }
-        }
-        *q = r + rot * local;
-    }
-    buf.anchor[g] = (r, rot);
-    let za = &mut buf.z_anchor[g];
-    za.clear();
-    za.extend(buf.x.iter().chain(&buf.theta).map(|v| v.re()));
-}
-
-/// Condensed coupling: how many values [`local_next`] writes (3 per pending chord).
-pub(crate) fn local_next_len(plan: &Plan) -> usize {
-    if plan.condensed {
-        3 * plan.pending.iter().map(Vec::len).sum::<usize>()
-    } else {
-        0
-    }
-}
-
-/// Condensed coupling: the assumed next holes as last settled, each in the frame of
-/// the guide whose chord uses it (`q_local = R_g^T (q - r_g)`, guide by guide), into
-/// `out` (length [`local_next_len`]). The warm solve's load-path predictor
-/// extrapolates these with the unknowns (`workspace/predict.rs`).
-pub(crate) fn local_next(plan: &Plan, buf: &PassBuf<f64>, out: &mut [f64]) {
-    let mut o = 0;
-    for (g, pend) in plan.pending.iter().enumerate().filter(|_| plan.condensed) {
-        let (ra, rota) = buf.anchor[g];
-        for &(j, k) in pend {
-            let local = rota.transpose() * (buf.next[j][k] - ra);
-            out[o..o + 3].copy_from_slice(local.as_slice());
-            o += 3;
-        }
-    }
-}
-
-/// Condensed coupling: adopt predicted next holes `local` (as [`local_next`] writes
-/// them) for unknowns `z = [x; theta]`: the next pass carries them along with each
-/// guide's pose and predicts from `z` on (see `transport_next`).
-pub(crate) fn set_local_next(plan: &Plan, buf: &mut PassBuf<f64>, local: &[f64], x: &[f64]) {
-    let mut o = 0;
-    for (g, pend) in plan.pending.iter().enumerate().filter(|_| plan.condensed) {
-        let (ra, rota) = buf.anchor[g];
-        for &(j, k) in pend {
-            buf.next[j][k] = ra + rota * Vector3::new(local[o], local[o + 1], local[o + 2]);
-            o += 3;
-        }
-        if !pend.is_empty() {
-            let za = &mut buf.z_anchor[g];
-            za.clear();
-            za.extend(x.iter().chain(&buf.theta));
-        }
-    }
-}
-
-/// Dual pass at the disk after `g`, after the fold: `D = d q_local/dz` of the pending
-/// next holes in guide `g`'s frame (`yg`: the state at guide `g`), columns
-/// `sweep_c0..` of this pass's outer directions (see `dnext`).
-fn store_dnext<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &State<T>, yg: &State<T>, g: usize) {
-    let nout = T::DIRS - JUMP_DIRS;
-    let (c0, sw) = (buf.sweep_c0, buf.sweep_w);
-    // rows have the full width `n + p` whatever this sweep covers
-    let w = buf.x.len() + buf.theta.len();
-    if sw == 0 || c0 >= sw || sw > w {
-        return;
-    }
-    let width = nout.min(sw - c0);
-    let rt = yg.rot.transpose();
-    let d = &mut buf.dnext[g];
-    if d.len() < 3 * plan.pending[g].len() * w {
-        return;
-    }
-    for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
-        let local = rt * (next_hole(plan, y, j, k) - yg.r);
-        for a in 0..3 {
-            let e = local[a].eps();
-            let row = &mut d[(3 * i + a) * w..(3 * i + a + 1) * w];
-            row[c0..c0 + width].copy_from_slice(&e[..width]);
-        }
-    }
-}
-
-/// `f64` pass at the disk after `ck.g`: compare the computed holes with the assumed
-/// ones; `true` when they agree, else update the assumed ones (Newton with the
-/// sweep's `M`, or the plain fixed point) and count the iteration.
-fn settle_segment<T: Real>(
-    plan: &Plan,
-    buf: &mut PassBuf<T>,
-    y: &State<T>,
-    ck: &mut Checkpoint<T>,
-) -> bool {
-    let pend = &plan.pending[ck.g];
-    let l = 3 * pend.len();
-    let mut err = [0.0; 3 * super::plan::MAX_CONDENSED_CABLES];
-    let mut worst = 0.0f64;
-    for (i, &(j, k)) in pend.iter().enumerate() {
-        let p = next_hole(plan, y, j, k).map(|x| x.re());
-        for a in 0..3 {
-            err[3 * i + a] = p[a] - buf.next[j][k][a];
-            worst = worst.max(err[3 * i + a].abs());
-        }
-    }
-    // round-off: Newton with the sweep's M converges quadratically, so an error that
-    // stops shrinking is the floor; from the plain fixed point the secant updates
-    // start slowly, so that gets a floor 100x lower
-    let floor = if buf.mlin_valid {
-        LOCAL_FLOOR
-    } else {
-        1e-2 * LOCAL_FLOOR
-    };
-    let stagnated = worst <= floor * plan.length && worst > 0.5 * ck.last_error;
-    if worst <= buf.local_tol * plan.length || stagnated {
-        if ck.iterations > 1 && buf.mlin_valid {
-            // keep the Broyden-improved M for the next pass (rows between sweeps
-            // otherwise start every segment from the last sweep's stale M)
-            let h = &buf.settle_h[..l * l];
-            buf.mlin[ck.g][..l * l].copy_from_slice(h);
-        }
-        return true;
-    }
-    ck.last_error = worst;
-    // H approximates -(dg/dq)^-1 for g(q) = p(q) - q: the sweep's (I - A)^-1, or I
-    // (the plain fixed point) before any sweep, improved by Broyden's inverse update
-    // from the last attempt's secant (dg dq: observed change of g over step dq),
-    // H <- H - (dq + H dg) dg^T / (dg^T dg), so a stale M or strong coupling near
-    // doubling back still converges superlinearly.
-    let h = &mut buf.settle_h[..l * l];
-    if ck.iterations == 0 {
-        for r in 0..l {
-            for c in 0..l {
-                h[r * l + c] = if buf.mlin_valid {
-                    buf.mlin[ck.g][r * l + c]
-                } else if r == c {
-                    1.0
-                } else {
-                    0.0
-                };
-            }
-        }
-    } else {
-        let mut dg = [0.0; 3 * super::plan::MAX_CONDENSED_CABLES];
-        let mut dd = 0.0;
-        for r in 0..l {
-            dg[r] = err[r] - buf.prev_err[r];
-            dd += dg[r] * dg[r];
-        }
-        if dd > 0.0 {
-            for r in 0..l {
-                let hdg: f64 = (0..l).map(|c| h[r * l + c] * dg[c]).sum();
-                let u = (buf.prev_step[r] + hdg) / dd;
-                for (hc, dgc) in h[r * l..(r + 1) * l].iter_mut().zip(&dg[..l]) {
-                    *hc -= u * dgc;
-                }
-            }
-        }
-    }
-    for (i, &(j, k)) in pend.iter().enumerate() {
-        for a in 0..3 {
-            let r = 3 * i + a;
-            let step: f64 = (0..l).map(|c| h[r * l + c] * err[c]).sum();
-            buf.prev_step[r] = step;
-            buf.prev_err[r] = err[r];
-            buf.next[j][k][a] += step;
-        }
-    }
-    ck.iterations += 1;
-    false
-}
-
-/// Dual pass at guide `g`: `B = d(n, m)/dq` of the chord of pending cable number
-/// `pos` towards its assumed next hole `q` (columns `3 pos..3 pos + 3` of the
-/// `6 x L` matrix), at the point's real values. The chord force is
-/// `F = t u`, `u = (q - p)/|q - p|`, so `dF/dq = t (I - u u^T)/|q - p|`; the jump is
-/// `(dn, dm) = -(F, arm x F)`.
-fn jump_block<T: Real>(
-    buf: &mut PassBuf<T>,
-    l: usize,
-    pos: usize,
-    chord: Vector3<f64>,
-    arm: Vector3<f64>,
-    t: f64,
-) {
-    let len = chord.norm();
-    // a zero chord exerts no force along a direction (see `unit`): no dependence on q,
-    // and the block must not keep another disk's values (the buffer is reused)
-    let d = if len > 0.0 {
-        let u = chord / len;
-        (Matrix3::identity() - u * u.transpose()) * (t / len)
-    } else {
-        Matrix3::zeros()
-    };
-    let md = arm.cross_matrix() * d;
-    for r in 0..3 {
-        for c in 0..3 {
-            buf.jump_b[r * l + 3 * pos + c] = -d[(r, c)];
-            buf.jump_b[(r + 3) * l + 3 * pos + c] = -md[(r, c)];
-        }
-    }
-}
-
-/// Dual pass after the chords at a guide with pending cables: seed the local
-/// directions on the jump of `(n, m)` (they are zero here: folded at this disk).
-fn seed_jump<T: Real>(y: &mut State<T>) {
-    let base = T::DIRS - JUMP_DIRS;
-    for a in 0..3 {
-        y.n[a].eps_mut()[base + a] = 1.0;
-        y.m[a].eps_mut()[base + 3 + a] = 1.0;
-    }
-}
-
-/// Dual pass at the disk after `g`: with `a = dp/dz` (outer directions) and
-/// `C = dp/dj` (the jump's local directions) read off the computed holes and `B` from
-/// guide `g`, fold `dj/dz = (I - B C)^-1 B a` into the outer directions, so the state
-/// carries exact outer derivatives only. Also stores `M = I + C (I - B C)^-1 B` for
-/// `f64` passes.
-fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut State<T>, g: usize) {
-    let pend = &plan.pending[g];
-    let l = 3 * pend.len();
-    let nout = T::DIRS - JUMP_DIRS;
-    let w = nout + l;
-    let (s, rest) = buf.lin.split_at_mut(36);
-    let (rhs, cmat) = rest.split_at_mut(JUMP_DIRS * (T::DIRS + plan.max_pending_dirs));
-    let rhs = &mut rhs[..JUMP_DIRS * w];
-    // s = I - B C (6 x 6); rhs = [B a | B] (6 x w); cmat = C (l x 6)
-    s.fill(0.0);
-    rhs.fill(0.0);
-    for r in 0..JUMP_DIRS {
-        s[r * 7] = 1.0;
-        rhs[r * w + nout..(r + 1) * w].copy_from_slice(&buf.jump_b[r * l..(r + 1) * l]);
-    }
-    for (i, &(j, k)) in pend.iter().enumerate() {
-        let p = next_hole(plan, y, j, k);
-        for a in 0..3 {
-            let q = 3 * i + a;
-            let e = p[a].eps();
-            cmat[q * JUMP_DIRS..(q + 1) * JUMP_DIRS].copy_from_slice(&e[nout..]);
-            for r in 0..JUMP_DIRS {
-                let b = buf.jump_b[r * l + q];
-                if b != 0.0 {
-                    for (o, eo) in e[..nout].iter().enumerate() {
-                        rhs[r * w + o] += b * eo;
-                    }
-                    for (c, ec) in e[nout..].iter().enumerate() {
-                        s[r * JUMP_DIRS + c] -= b * ec;
-                    }
-                }
-            }
-        }
-    }
-    let solved = solve_small(s, JUMP_DIRS, rhs, w);
-    if solved {
-        // M = I + C K with K = (I - B C)^-1 B (the last l columns of rhs)
-        let m = &mut buf.mlin[g];
-        for r in 0..l {
-            for c in 0..l {
-                let ck: f64 = (0..JUMP_DIRS)
-                    .map(|t| cmat[r * JUMP_DIRS + t] * rhs[t * w + nout + c])
-                    .sum();
-                m[r * l + c] = if r == c { 1.0 } else { 0.0 } + ck;
-            }
-        }
-    }
-    // a singular segment map leaves the Jacobian inexact (the outer Newton's line
-    // search tolerates that) and drops M
-    buf.mlin_valid = solved;
-    let fold = |z: &mut T| {
-        let e = z.eps_mut();
-        for c in 0..JUMP_DIRS {
-            let lc = e[nout + c];
-            if lc != 0.0 && solved {
-                for o in 0..nout {
-                    e[o] += lc * rhs[c * w + o];
-                }
-            }
-            e[nout + c] = 0.0;
-        }
-    };
-    y.r.iter_mut().for_each(fold);
-    y.rot.iter_mut().for_each(fold);
-    y.n.iter_mut().for_each(fold);
-    y.m.iter_mut().for_each(fold);
-}
-
 /// Determinant of `d(n, m)/d(n0, m0)` (6 x 6), or of `dm/dm0` (3 x 3) when `n(0)` is
 /// in closed form, from the first derivative directions of a dual state seeded along
 /// the base wrench. It is positive at the base; a zero crossing along the rod is a
@@ -970,78 +641,6 @@ fn wrench_det<T: Real>(plan: &Plan, y: &State<T>) -> f64 {
         }
     }
     det_small(&mut a[..k * k], k)
-}
-
-/// Determinant by Gaussian elimination with partial pivoting (destroys `a`).
-fn det_small(a: &mut [f64], n: usize) -> f64 {
-    let mut det = 1.0;
-    for col in 0..n {
-        let piv = (col..n)
-            .max_by(|&x, &y| a[x * n + col].abs().total_cmp(&a[y * n + col].abs()))
-            .unwrap_or(col);
-        if a[piv * n + col] == 0.0 {
-            return 0.0;
-        }
-        if piv != col {
-            for c in 0..n {
-                a.swap(piv * n + c, col * n + c);
-            }
-            det = -det;
-        }
-        let d = a[col * n + col];
-        det *= d;
-        for r in col + 1..n {
-            let f = a[r * n + col] / d;
-            for c in col..n {
-                a[r * n + c] -= f * a[col * n + c];
-            }
-        }
-    }
-    det
-}
-
-/// Solve `a x = b` in place (`a` is `n x n`, `b` is `n x w`, row-major) by Gaussian
-/// elimination with partial pivoting; `false` when `a` is singular.
-fn solve_small(a: &mut [f64], n: usize, b: &mut [f64], w: usize) -> bool {
-    for col in 0..n {
-        let piv = (col..n)
-            .max_by(|&x, &y| a[x * n + col].abs().total_cmp(&a[y * n + col].abs()))
-            .unwrap_or(col);
-        if a[piv * n + col].abs() < 1e-14 {
-            return false;
-        }
-        if piv != col {
-            for c in 0..n {
-                a.swap(piv * n + c, col * n + c);
-            }
-            for c in 0..w {
-                b.swap(piv * w + c, col * w + c);
-            }
-        }
-        let inv = 1.0 / a[col * n + col];
-        for r in col + 1..n {
-            let f = a[r * n + col] * inv;
-            if f != 0.0 {
-                for c in col..n {
-                    a[r * n + c] -= f * a[col * n + c];
-                }
-                for c in 0..w {
-                    b[r * w + c] -= f * b[col * w + c];
-                }
-            }
-        }
-    }
-    for col in (0..n).rev() {
-        let inv = 1.0 / a[col * n + col];
-        for c in 0..w {
-            let mut v = b[col * w + c];
-            for k in col + 1..n {
-                v -= a[col * n + k] * b[k * w + c];
-            }
-            b[col * w + c] = v * inv;
-        }
-    }
-    true
 }
 
 trait ZerosT<T: Real> {
