@@ -58,6 +58,26 @@ fn till_spec(guides: Option<GuideSpec>, cables: Vec<CableSpec>) -> RobotSpec {
     }
 }
 
+/// Till's robot emulated with `n` massless point disks (holes at the tendons'
+/// 15.06 mm), the four tendons through them.
+fn till_disks(n: usize) -> Robot {
+    let h = 0.5 / n as f64;
+    let guides = GuideSpec {
+        count: n,
+        first_offset_m: h,
+        spacing_m: h,
+        thickness_m: 0.0,
+        diameter_m: 0.04,
+        mass_kg: 0.0,
+        holes: HolesSpec {
+            radius_m: 0.01506,
+            angles_deg: vec![0.0, 90.0, 180.0, 270.0],
+        },
+    };
+    let cables = (0..4).map(|k| CableSpec::through_hole(k, 0)).collect();
+    Robot::new(till_spec(Some(guides), cables)).unwrap()
+}
+
 fn continuous(path: PathSpec) -> CableSpec {
     CableSpec {
         continuous: true,
@@ -93,22 +113,7 @@ fn disk_model_converges_to_continuous_with_order_two() {
     let reference = solve_tip(sc.build_robot().unwrap(), &sc.loads, rk4(512));
     let mut errors = Vec::new();
     for n in [100usize, 200, 400] {
-        let h = 0.5 / n as f64;
-        let guides = GuideSpec {
-            count: n,
-            first_offset_m: h,
-            spacing_m: h,
-            thickness_m: 0.0,
-            diameter_m: 0.04,
-            mass_kg: 0.0,
-            holes: HolesSpec {
-                radius_m: 0.01506,
-                angles_deg: vec![0.0, 90.0, 180.0, 270.0],
-            },
-        };
-        let cables = (0..4).map(|k| CableSpec::through_hole(k, 0)).collect();
-        let robot = Robot::new(till_spec(Some(guides), cables)).unwrap();
-        let tip = solve_tip(robot, &sc.loads, rk4(n));
+        let tip = solve_tip(till_disks(n), &sc.loads, rk4(n));
         errors.push((tip - reference).norm());
     }
     let (r1, r2) = (errors[0] / errors[1], errors[1] / errors[2]);
@@ -748,21 +753,7 @@ fn displacement_driven_continuous_tendons_are_refused_by_name() {
 fn warm_ramp_on_disks_matches_cold_with_few_local_iterations() {
     let sc = till();
     let n = 40usize;
-    let h = 0.5 / n as f64;
-    let guides = GuideSpec {
-        count: n,
-        first_offset_m: h,
-        spacing_m: h,
-        thickness_m: 0.0,
-        diameter_m: 0.04,
-        mass_kg: 0.0,
-        holes: HolesSpec {
-            radius_m: 0.01506,
-            angles_deg: vec![0.0, 90.0, 180.0, 270.0],
-        },
-    };
-    let cables = (0..4).map(|k| CableSpec::through_hole(k, 0)).collect();
-    let robot = Robot::new(till_spec(Some(guides), cables)).unwrap();
+    let robot = till_disks(n);
     let mut loads = sc.loads.clone();
     loads.tensions_n[0] = 1.0;
     let mut ws = Workspace::new(robot.clone(), loads.clone(), rk4(n)).unwrap();
