@@ -31,6 +31,10 @@ use super::TendonWorkspace;
 use crate::math::DenseLu;
 use crate::statics::{SolveStatus, LOCAL_TOL};
 
+// The row's start: the previous row's residual without a pass, and a predictor.
+mod predict;
+use predict::RowStart;
+
 /// Newton iterations of the joint path before it hands back.
 pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
 /// Largest accepted step of the scaled shooting unknowns (forces in units of
@@ -118,12 +122,25 @@ pub(super) struct JointBufs {
     l2: f64,
     /// Settle tolerance of the inner passes now in effect (fraction of the length).
     inner_tol: f64,
+    /// Row-to-row predictor (`predict` submodule): the solutions `[x; T]` of the
+    /// last converged rows, newest first (`HISTORY x (n + p)`), their free lengths
+    /// (`HISTORY x p`), how many are held, scratch.
+    hist_z: Vec<f64>,
+    hist_f: Vec<f64>,
+    hist_len: usize,
+    zp: Vec<f64>,
+    /// The workspace's point, `t`, `lengths`, the taut flags and `f_now` are still
+    /// those of the last converged row's final evaluation (no pass since).
+    pub(super) at_solution: bool,
+    /// This row's joint Newton started from a predicted point.
+    predicted: bool,
 }
 
 impl JointBufs {
     /// Drop the reused Jacobian (a cold start must not depend on earlier rows).
     pub(super) fn forget_jacobian(&mut self) {
         self.lu_valid = false;
+        self.at_solution = false;
         self.first_chord_ok = true;
         self.rows_fresh = 0;
     }
@@ -155,6 +172,12 @@ impl JointBufs {
             rows_fresh: 0,
             l2: f64::INFINITY,
             inner_tol: LOCAL_TOL,
+            hist_z: vec![0.0; predict::HISTORY * (n + p)],
+            hist_f: vec![0.0; predict::HISTORY * p],
+            hist_len: 0,
+            zp: vec![0.0; n + p],
+            at_solution: false,
+            predicted: false,
         }
     }
 }
@@ -180,9 +203,32 @@ impl TendonWorkspace {
         self.joint.x0.copy_from_slice(self.ws.unknowns_vector());
         self.joint.t0.copy_from_slice(&self.t);
         self.joint.x.copy_from_slice(&self.joint.x0);
-        let first = match self.joint_newton(1.0) {
-            Ok(()) => return true,
-            Err(first) => first,
+        self.joint.predicted = false;
+        let mut first = None;
+        match self.joint_predict() {
+            RowStart::Converged => {
+                self.report.status = SolveStatus::Converged;
+                self.report.iterations = 0;
+                return true;
+            }
+            RowStart::Evaluated(m) => match self.joint_newton(1.0, Some(m)) {
+                Ok(()) => return true,
+                Err(f) if !self.joint.predicted => first = Some(f),
+                Err(_) => {
+                    // the predicted start did not converge: the row's plain start
+                    self.joint_inner_tolerance(0.0);
+                    self.t.copy_from_slice(&self.joint.t0);
+                    self.joint.x.copy_from_slice(&self.joint.x0);
+                }
+            },
+            RowStart::Plain => {}
+        }
+        let first = match first {
+            Some(f) => f,
+            None => match self.joint_newton(1.0, None) {
+                Ok(()) => return true,
+                Err(first) => first,
+            },
         };
         // continuation, when the first fresh step says how far the row is (from the
         // free lengths of the starting point: the previous row's)
@@ -213,7 +259,7 @@ impl TendonWorkspace {
                 self.free[i] = a + s * (b - a);
             }
             let tol = if s == 1.0 { 1.0 } else { SUBSTEP_MERIT };
-            let out = self.joint_newton(tol);
+            let out = self.joint_newton(tol, None);
             iterations += self.report.iterations;
             attempts += 1;
             if out.is_ok() {
@@ -238,11 +284,11 @@ impl TendonWorkspace {
     /// most `merit_tol` (1: converged). `Err` with the largest component of the first
     /// fresh Newton step in the scaled shooting unknowns (infinite when unknown)
     /// when it stopped without converging; the iterate is then unspecified.
-    fn joint_newton(&mut self, merit_tol: f64) -> Result<(), f64> {
+    fn joint_newton(&mut self, merit_tol: f64, evaluated: Option<f64>) -> Result<(), f64> {
         let n = self.ws.unknowns();
         let p = self.driven.len();
         let mut first_step = f64::INFINITY;
-        let Some(mut merit) = self.joint_evaluate() else {
+        let Some(mut merit) = evaluated.or_else(|| self.joint_evaluate()) else {
             return Err(first_step);
         };
         for it in 0..JOINT_MAX_ITERATIONS {
