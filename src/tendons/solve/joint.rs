@@ -134,6 +134,13 @@ pub(super) struct JointBufs {
     pub(super) at_solution: bool,
     /// This row's joint Newton started from a predicted point.
     predicted: bool,
+    /// Active-set switch of a fresh step (`joint_switch_step`): the iterate's
+    /// branch values, and the step's own active set, step and residual.
+    gap0: Vec<f64>,
+    arm0: Vec<f64>,
+    sw_taut: Vec<bool>,
+    sw_dz: Vec<f64>,
+    sw_f: Vec<f64>,
 }
 
 impl JointBufs {
@@ -178,6 +185,11 @@ impl JointBufs {
             zp: vec![0.0; n + p],
             at_solution: false,
             predicted: false,
+            gap0: vec![0.0; p],
+            arm0: vec![0.0; p],
+            sw_taut: vec![true; p],
+            sw_dz: vec![0.0; n + p],
+            sw_f: vec![0.0; n + p],
         }
     }
 }
@@ -363,6 +375,11 @@ impl TendonWorkspace {
                 // inexact inner solves while far away (as the shooting Newton does):
                 // the trial's next holes settle to 1e-7 of the iterate's residual
                 self.joint_inner_tolerance(merit);
+                if fresh {
+                    self.joint_save_branches();
+                }
+                // 0: the step's own active set, 1: trying the full step's, 2: tried
+                let mut switched = 0u8;
                 let mut alpha = 1.0;
                 for _ in 0..if fresh { 8 } else { 1 } {
                     for i in 0..n {
@@ -381,6 +398,21 @@ impl TendonWorkspace {
                             accepted = Some(m);
                             break;
                         }
+                    }
+                    if fresh && switched == 0 && self.taut != self.joint.lu_taut {
+                        // the full step crossed a kink of G (a tendon went slack or
+                        // taut): Newton's step from the iterate with the active set
+                        // found there, before any backtracking (`joint_switch_step`)
+                        switched = 2;
+                        if self.joint_switch_step(n, p) {
+                            switched = 1;
+                            continue;
+                        }
+                    } else if switched == 1 {
+                        // it did not help: back to the step's own set, backtracking
+                        switched = 2;
+                        self.joint_unswitch();
+                        alpha = 1.0;
                     }
                     alpha *= 0.5;
                 }
@@ -517,6 +549,73 @@ impl TendonWorkspace {
                 jb.dz[n + i] = -self.t[i];
             }
         }
+    }
+
+    /// The iterate's two branches of each tendon's NCP function (the stretch gap
+    /// `c_i T_i + L_f,i - l_i` and the slack arm `a_i T_i`), before a fresh step's
+    /// trials overwrite the lengths.
+    fn joint_save_branches(&mut self) {
+        for i in 0..self.driven.len() {
+            let j = self.driven[i];
+            let m = &self.mech[i];
+            let (f, mf) = (self.free[i], self.mean_factor[i]);
+            self.joint.gap0[i] = m.covered(f, self.t[i], mf) - self.lengths[j];
+            self.joint.arm0[i] = (m.compliance(f, mf) + self.geo[i]) * self.t[i];
+        }
+    }
+
+    /// After a fresh step whose full-length trial changed the active set (and was
+    /// not accepted): the semi-smooth Newton step from the iterate with the trial's
+    /// active set, from the same sweep (the generalized Jacobian's rows of the
+    /// switched tendons exchanged, no new sweep). `false` (the step's own set
+    /// restored) when that Jacobian is singular or the step too long. Why: on the
+    /// FTDCR v4 val rows where a tendon goes slack within a row, the projected step
+    /// (a taut tendon's tension clamped at 0) raised the merit 14-50x and the
+    /// backtracking then crept along at 0.5-0.97 of it per fresh sweep until the
+    /// row was handed back.
+    fn joint_switch_step(&mut self, n: usize, p: usize) -> bool {
+        let jb = &mut self.joint;
+        let m = n + p;
+        jb.sw_taut.copy_from_slice(&jb.lu_taut);
+        jb.sw_dz.copy_from_slice(&jb.dz);
+        jb.sw_f.copy_from_slice(&jb.f_prev);
+        jb.lu_taut.copy_from_slice(&self.taut);
+        for i in 0..p {
+            jb.f_prev[n + i] = if jb.lu_taut[i] {
+                jb.gap0[i]
+            } else {
+                jb.arm0[i]
+            };
+        }
+        if !self.joint_assemble() {
+            self.joint_unswitch();
+            return false;
+        }
+        let jb = &mut self.joint;
+        for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
+            *d = -row.iter().zip(&jb.f_prev).map(|(a, b)| a * b).sum::<f64>();
+        }
+        for i in 0..p {
+            if !jb.lu_taut[i] {
+                jb.dz[n + i] = -jb.ts[i];
+            }
+        }
+        let dx_max = jb.dz[..n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
+        if !dx_max.is_finite() || dx_max > MAX_STEP {
+            self.joint_unswitch();
+            return false;
+        }
+        true
+    }
+
+    /// Undo [`Self::joint_switch_step`]: the step, residual and factorisation of the
+    /// step's own active set.
+    fn joint_unswitch(&mut self) {
+        let jb = &mut self.joint;
+        jb.lu_taut.copy_from_slice(&jb.sw_taut);
+        jb.dz.copy_from_slice(&jb.sw_dz);
+        jb.f_prev.copy_from_slice(&jb.sw_f);
+        self.joint_assemble();
     }
 
     /// Broyden's ("good") update of the inverse Jacobian from the accepted step
