@@ -92,12 +92,34 @@ fn estimator_tick_inputs() {
 
 #[test]
 fn readings_stream_inputs() {
-    replay("readings_stream", shared_readings::check_readings, 2);
+    // every input on both robots (the fuzz target picks one per input:
+    // `robot_for`, which the replays below therefore cover)
+    replay(
+        "readings_stream",
+        |d| shared_readings::check_readings_on(shared_readings::Robot::Small, d),
+        2,
+    );
+    replay(
+        "readings_stream",
+        |d| shared_readings::check_readings_on(shared_readings::Robot::Shipped, d),
+        2,
+    );
 }
 
 #[test]
 fn load_cells_stream_inputs() {
-    replay("load_cells_stream", shared_load_cells::check_load_cells, 2);
+    // every input on both robots (the fuzz target picks one per input:
+    // `robot_for`, which the replays below therefore cover)
+    replay(
+        "load_cells_stream",
+        |d| shared_load_cells::check_load_cells_on(shared_load_cells::Robot::Small, d),
+        2,
+    );
+    replay(
+        "load_cells_stream",
+        |d| shared_load_cells::check_load_cells_on(shared_load_cells::Robot::Shipped, d),
+        2,
+    );
 }
 
 #[test]
