@@ -108,13 +108,6 @@ pub(crate) struct PassBuf<T: Real> {
     pub dnext_valid: bool,
     /// `f64` passes: per guide, `z` at which its `next` holes were last settled.
     z_anchor: Vec<Vec<f64>>,
-    /// `f64` passes: the guide whose next holes `transport_next` last predicted with
-    /// `dnext` (`usize::MAX`: none), that prediction (`q_local`, `3 L`) and the change
-    /// of `z` it was made for: the secant pair of `dnext`'s Broyden update at the
-    /// segment's settle (`condensed::settle_segment`).
-    tr_g: usize,
-    tr_local: Vec<f64>,
-    tr_dz: Vec<f64>,
     /// Dual passes: the first outer direction this pass is seeded along and the
     /// width `W` of the full sweep (set by `sweep`).
     pub sweep_c0: usize,
@@ -160,9 +153,6 @@ impl<T: Real> PassBuf<T> {
                 .collect(),
             dnext_valid: false,
             z_anchor: vec![Vec::new(); plan.pending.len()],
-            tr_g: usize::MAX,
-            tr_local: vec![0.0; plan.max_pending_dirs],
-            tr_dz: vec![0.0; plan.n_unknowns + plan.params.len()],
             sweep_c0: 0,
             sweep_w: 0,
             lin: vec![0.0; 36 + JUMP_DIRS * (T::DIRS + 2 * plan.max_pending_dirs)],

@@ -47,26 +47,21 @@ pub(super) fn transport_next<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &Sta
     let w = n + buf.theta.len();
     let za = &buf.z_anchor[g];
     let predict = buf.dnext_valid && za.len() == w;
-    buf.tr_g = usize::MAX;
-    if predict {
-        let z = buf.x.iter().chain(&buf.theta).map(|v| v.re());
-        for ((d, z), a) in buf.tr_dz.iter_mut().zip(z).zip(za) {
-            *d = z - a;
-        }
-        if buf.tr_dz.iter().any(|d| *d != 0.0) {
-            buf.tr_g = g;
-        }
-    }
     for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
         let q = &mut buf.next[j][k];
         let mut local = rota.transpose() * (*q - ra);
-        if buf.tr_g == g {
+        if predict {
             let d = &buf.dnext[g];
             for a in 0..3 {
                 let row = &d[(3 * i + a) * w..(3 * i + a + 1) * w];
-                let dq: f64 = row.iter().zip(&buf.tr_dz).map(|(d, z)| d * z).sum();
+                let mut dq = 0.0;
+                for c in 0..n {
+                    dq += row[c] * (buf.x[c].re() - za[c]);
+                }
+                for c in n..w {
+                    dq += row[c] * (buf.theta[c - n].re() - za[c]);
+                }
                 local[a] += dq;
-                buf.tr_local[3 * i + a] = local[a];
             }
         }
         *q = r + rot * local;
@@ -190,20 +185,6 @@ pub(super) fn settle_segment<T: Real>(
             let h = &buf.settle_h[..l * l];
             buf.mlin[ck.g][..l * l].copy_from_slice(h);
         }
-        // The settled holes `q` agree with the holes `p(q)` computed from them to
-        // `local_tol`; `p` is closer to the fixed point by the segment's contraction
-        // (`T (h^2/6 + rho h/2) / EI`, ~4e-3 on Till's robot on 100 disks), so keep `p`
-        // for what starts from these holes: the next pass's transport and the warm
-        // predictor's extrapolation (`local_next`). The state was integrated with `q`,
-        // within `local_tol` as before. Measured on Till's 100-disk warm ramp
-        // (`examples/till_ramp_profile.rs disks`): 109.7 -> 82.0 gap re-integrations a
-        // solve, tips within 4.4e-11 m.
-        for (i, &(j, k)) in pend.iter().enumerate() {
-            for a in 0..3 {
-                buf.next[j][k][a] += err[3 * i + a];
-            }
-        }
-        secant_dnext(plan, buf, ck.g);
         return true;
     }
     ck.last_error = worst;
@@ -254,54 +235,6 @@ pub(super) fn settle_segment<T: Real>(
     ck.iterations += 1;
     false
 }
-
-/// `f64` pass, segment after guide `g` settled: Broyden's update of the stale
-/// `D = d q_local/dz` (from the last sweep) along the change of `z` that
-/// `transport_next` predicted for, `D <- D + (q_obs - q_pred) dz^T / (dz^T dz)` with
-/// the settled holes `q_obs` (Broyden, "A class of methods for solving nonlinear
-/// simultaneous equations", 1965: the secant condition on the latest step, the rest of
-/// `D` unchanged). Why: along a load ramp the chord steps of successive solves point
-/// the same way, and a `D` corrected along that direction starts the local iteration
-/// closer, saving re-integrations of the segment. Skipped for tiny steps (the miss
-/// would be round-off) and tiny misses (`D` already predicts the step).
-fn secant_dnext<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, g: usize) {
-    if buf.tr_g != g || !buf.dnext_valid {
-        return;
-    }
-    buf.tr_g = usize::MAX;
-    let dz2: f64 = buf.tr_dz.iter().map(|d| d * d).sum();
-    let dz_max = buf.tr_dz.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-    if !(dz_max > SECANT_MIN_STEP && dz2.is_finite()) {
-        return;
-    }
-    let (ra, rota) = buf.anchor[g];
-    let w = buf.tr_dz.len();
-    let mut miss = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
-    let mut worst = 0.0f64;
-    for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
-        let local = rota.transpose() * (buf.next[j][k] - ra);
-        for a in 0..3 {
-            miss[3 * i + a] = local[a] - buf.tr_local[3 * i + a];
-            worst = worst.max(miss[3 * i + a].abs());
-        }
-    }
-    if !(worst > SECANT_MIN_MISS * plan.length && worst.is_finite()) {
-        return;
-    }
-    let d = &mut buf.dnext[g];
-    for (row, m) in d.chunks_exact_mut(w).zip(&miss) {
-        let u = m / dz2;
-        for (dc, zc) in row.iter_mut().zip(&buf.tr_dz) {
-            *dc += u * zc;
-        }
-    }
-}
-
-/// Smallest change of the scaled outer unknowns (largest component) that updates `D`
-/// (`secant_dnext`): below it the observed miss is mostly the settle's round-off.
-const SECANT_MIN_STEP: f64 = 1e-12;
-/// Smallest miss of the prediction (fraction of the rod length) worth an update.
-const SECANT_MIN_MISS: f64 = 1e-14;
 
 /// Dual pass at guide `g`: `B = d(n, m)/dq` of the chord of pending cable number
 /// `pos` towards its assumed next hole `q` (columns `3 pos..3 pos + 3` of the

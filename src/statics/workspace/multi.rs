@@ -35,14 +35,11 @@ impl Workspace {
     /// Multiple shooting instead of single shooting for this solve (module docs), or
     /// `None`.
     pub(super) fn multi_first(&mut self, start: Start, intensity: f64) -> Option<SolveReport> {
-        let large = intensity > MULTI_INTENSITY;
-        // below MULTI_INTENSITY neither case below applies: answer before
-        // `Multi::supports`, which walks every guide's cables (14 k instructions a
-        // warm solve of Till's robot on 100 disks, 1.6 % of it)
-        if !large || !self.multi_allowed(intensity) {
+        if !self.multi_allowed(intensity) {
             self.multi_active = false;
             return None;
         }
+        let large = intensity > MULTI_INTENSITY;
         let warm = start == Start::Warm && self.multi_active && self.multi.has_solution();
         let warm_single = start == Start::Warm && !self.multi_active && self.has_solution;
         let cold = !warm && !warm_single && self.settings.continuation && large;
