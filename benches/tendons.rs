@@ -11,6 +11,14 @@
 //!   method from the straight rod). Issue target: <= 2 ms.
 //! * `tendon_track_row`: a warm row plus its JSON record (what `track` does per row,
 //!   without the write). Issue target: <= 150 us.
+//! * `tendon_control_tick_1khz`: the control-loop case of a servo controller at
+//!   1 kHz: the recording's readings linearly interpolated in time to one tick per
+//!   millisecond between its rows (rows are ~0.6 s apart, so ~600 ticks a row, and
+//!   the pauses between patterns are ticks of constant readings), each tick
+//!   warm-started from the previous tick; one iteration = one tick (after the last
+//!   row it starts over from the first). No target of its own: issue 9's 100 us is
+//!   per recorded row (`tendon_readings_warm`), whose readings change ~600 times as
+//!   much from one solve to the next.
 //!
 //! Rows that do not converge during timing are counted on stderr. Log:
 //! `benches/README.md`.
@@ -28,6 +36,39 @@ fn rows(scene: &Scene, ws: &cablesense::tendons::TendonWorkspace) -> Vec<Reading
         .enumerate()
         .filter_map(|(i, l)| p.line(i + 1, l).ok().flatten())
         .collect()
+}
+
+/// The 1 kHz control loop's position in the recording: row interval `k`, time `t`
+/// (s) and the interpolated readings `q` (m).
+struct Ticks {
+    k: usize,
+    t: f64,
+    q: Vec<f64>,
+}
+
+impl Ticks {
+    /// Advance one millisecond (past the last row: back to the first) and
+    /// interpolate the readings between the rows around `t`. No allocation.
+    fn next(&mut self, rows: &[ReadingRow], times: &[f64]) {
+        self.t += 1e-3;
+        while self.k + 1 < rows.len() && self.t >= times[self.k + 1] {
+            self.k += 1;
+        }
+        if self.k + 1 >= rows.len() {
+            self.k = 0;
+            self.t = times[0];
+        }
+        let (a, b) = (&rows[self.k].readings_m, &rows[self.k + 1].readings_m);
+        let (t0, t1) = (times[self.k], times[self.k + 1]);
+        let s = if t1 > t0 {
+            ((self.t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        for ((q, a), b) in self.q.iter_mut().zip(a).zip(b) {
+            *q = a + s * (b - a);
+        }
+    }
 }
 
 fn benches(c: &mut Criterion) {
@@ -64,6 +105,23 @@ fn benches(c: &mut Criterion) {
             });
             black_box(rec.to_string());
             k += 1;
+        })
+    });
+    // 1 kHz ticks between the rows (time stamps of the recording)
+    let times: Vec<f64> = rows
+        .iter()
+        .map(|r| r.t_s.expect("val.csv has time stamps"))
+        .collect();
+    let mut tick = Ticks {
+        k: 0,
+        t: times[0],
+        q: rows[0].readings_m.clone(),
+    };
+    g.bench_function("tendon_control_tick_1khz", |b| {
+        b.iter(|| {
+            tick.next(&rows, &times);
+            let r = ws.solve_readings(black_box(&tick.q));
+            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
         })
     });
     g.finish();

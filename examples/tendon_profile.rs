@@ -2,6 +2,8 @@
 //! dual right-hand sides, joint iterations, time. For profiling (issue 9's speed).
 //!
 //! `cargo run --release --example tendon_profile [SCENE] [READINGS] [REPEAT]`
+//! (`VERBOSE=1` a line per row, `COLD=1` every row cold, `TIPS=FILE` every row's tip,
+//! `KHZ=N` the first N ticks of a 1 kHz control loop between the rows)
 use cablesense::Scene;
 use std::time::Instant;
 
@@ -17,11 +19,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut ws = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&ws);
     let text = std::fs::read_to_string(data)?;
-    let rows: Vec<_> = text
+    let mut rows: Vec<_> = text
         .lines()
         .enumerate()
         .filter_map(|(i, l)| parser.line(i + 1, l).ok().flatten())
         .collect();
+    // KHZ=N: the first N ticks of the control loop at 1 kHz instead (the readings
+    // linearly interpolated in time between the rows; `tendon_control_tick_1khz`)
+    if let Some(n) = std::env::var("KHZ")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        let mut ticks = Vec::with_capacity(n);
+        let (mut k, mut t) = (0, rows[0].t_s.unwrap_or(0.0));
+        while ticks.len() < n && k + 1 < rows.len() {
+            let (t0, t1) = (rows[k].t_s.unwrap_or(0.0), rows[k + 1].t_s.unwrap_or(0.0));
+            if t >= t1 {
+                k += 1;
+                continue;
+            }
+            let s = ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+            let mut row = rows[k].clone();
+            for (q, b) in row.readings_m.iter_mut().zip(&rows[k + 1].readings_m) {
+                *q += s * (b - *q);
+            }
+            ticks.push(row);
+            t += 1e-3;
+        }
+        rows = ticks;
+    }
     let (mut f_all, mut d_all, mut t_all) = (0u64, 0u64, 0.0);
     let mut per_row = Vec::new();
     let mut bad = 0;

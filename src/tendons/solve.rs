@@ -337,6 +337,7 @@ impl TendonWorkspace {
     /// Values of the extra load parameters (after the tensions).
     pub fn set_extra(&mut self, extra: &[f64]) {
         let p = self.driven.len();
+        self.joint.forget_history();
         for (k, v) in extra.iter().enumerate().take(self.n_extra) {
             self.theta[p + k] = *v;
         }
@@ -429,8 +430,10 @@ impl TendonWorkspace {
             && self.solve_joint()
             && self.refresh_factors()
         {
+            self.joint.at_solution = true;
             return Ok(self.finish());
         }
+        self.joint.at_solution = false;
         // a cold start takes the same path from the reference equilibrium (zero
         // readings, the pretensions: solved once at construction, so the start does
         // not depend on earlier rows), continued in the readings by `solve_joint`'s
@@ -444,8 +447,10 @@ impl TendonWorkspace {
             self.ws.adopt_unknowns(&self.x_ref, false);
             self.joint.forget_jacobian();
             if self.solve_joint() && self.refresh_factors() {
+                self.joint.at_solution = true;
                 return Ok(self.finish());
             }
+            self.joint.at_solution = false;
         }
         self.report.status = SolveStatus::MaxIterations;
         // the point T: shooting solve, factors, lengths, sensitivities, residual
@@ -544,6 +549,10 @@ impl TendonWorkspace {
     }
 
     fn finish(&mut self) -> TendonReport {
+        if self.report.status.is_converged() {
+            self.joint
+                .push_history(self.ws.unknowns_vector(), &self.t, &self.free);
+        }
         self.report.residual_m = self.merit();
         self.report.slack = self.taut.iter().filter(|t| !**t).count();
         self.has_solution = self.report.status.is_converged() || self.has_solution;

@@ -31,6 +31,10 @@ use super::TendonWorkspace;
 use crate::math::DenseLu;
 use crate::statics::{SolveStatus, LOCAL_TOL};
 
+// The row's start: the previous row's residual without a pass, and a predictor.
+mod predict;
+use predict::RowStart;
+
 /// Newton iterations of the joint path before it hands back.
 pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
 /// Largest accepted step of the scaled shooting unknowns (forces in units of
@@ -118,12 +122,35 @@ pub(super) struct JointBufs {
     l2: f64,
     /// Settle tolerance of the inner passes now in effect (fraction of the length).
     inner_tol: f64,
+    /// Row-to-row predictor (`predict` submodule): the solutions `[x; T]` of the
+    /// last converged rows, newest first (`HISTORY x (n + p)`), their free lengths
+    /// (`HISTORY x p`), how many are held, scratch.
+    hist_z: Vec<f64>,
+    hist_f: Vec<f64>,
+    hist_len: usize,
+    zp: Vec<f64>,
+    /// The workspace's point, `t`, `lengths`, the taut flags and `f_now` are still
+    /// those of the last converged row's final evaluation (no pass since).
+    pub(super) at_solution: bool,
+    /// This row's joint Newton started from a predicted point.
+    predicted: bool,
+    /// `l2` merit at the last predicted point over the merit at its row's start
+    /// (what the next prediction expects: its settle tolerance).
+    pred_ratio: f64,
+    /// Active-set switch of a fresh step (`joint_switch_step`): the iterate's
+    /// branch values, and the step's own active set, step and residual.
+    gap0: Vec<f64>,
+    arm0: Vec<f64>,
+    sw_taut: Vec<bool>,
+    sw_dz: Vec<f64>,
+    sw_f: Vec<f64>,
 }
 
 impl JointBufs {
     /// Drop the reused Jacobian (a cold start must not depend on earlier rows).
     pub(super) fn forget_jacobian(&mut self) {
         self.lu_valid = false;
+        self.at_solution = false;
         self.first_chord_ok = true;
         self.rows_fresh = 0;
     }
@@ -155,6 +182,18 @@ impl JointBufs {
             rows_fresh: 0,
             l2: f64::INFINITY,
             inner_tol: LOCAL_TOL,
+            hist_z: vec![0.0; predict::HISTORY * (n + p)],
+            hist_f: vec![0.0; predict::HISTORY * p],
+            hist_len: 0,
+            zp: vec![0.0; n + p],
+            at_solution: false,
+            predicted: false,
+            pred_ratio: 1.0,
+            gap0: vec![0.0; p],
+            arm0: vec![0.0; p],
+            sw_taut: vec![true; p],
+            sw_dz: vec![0.0; n + p],
+            sw_f: vec![0.0; n + p],
         }
     }
 }
@@ -180,9 +219,32 @@ impl TendonWorkspace {
         self.joint.x0.copy_from_slice(self.ws.unknowns_vector());
         self.joint.t0.copy_from_slice(&self.t);
         self.joint.x.copy_from_slice(&self.joint.x0);
-        let first = match self.joint_newton(1.0) {
-            Ok(()) => return true,
-            Err(first) => first,
+        self.joint.predicted = false;
+        let mut first = None;
+        match self.joint_predict() {
+            RowStart::Converged => {
+                self.report.status = SolveStatus::Converged;
+                self.report.iterations = 0;
+                return true;
+            }
+            RowStart::Evaluated(m) => match self.joint_newton(1.0, Some(m)) {
+                Ok(()) => return true,
+                Err(f) if !self.joint.predicted => first = Some(f),
+                Err(_) => {
+                    // the predicted start did not converge: the row's plain start
+                    self.joint_inner_tolerance(0.0);
+                    self.t.copy_from_slice(&self.joint.t0);
+                    self.joint.x.copy_from_slice(&self.joint.x0);
+                }
+            },
+            RowStart::Plain => {}
+        }
+        let first = match first {
+            Some(f) => f,
+            None => match self.joint_newton(1.0, None) {
+                Ok(()) => return true,
+                Err(first) => first,
+            },
         };
         // continuation, when the first fresh step says how far the row is (from the
         // free lengths of the starting point: the previous row's)
@@ -213,7 +275,7 @@ impl TendonWorkspace {
                 self.free[i] = a + s * (b - a);
             }
             let tol = if s == 1.0 { 1.0 } else { SUBSTEP_MERIT };
-            let out = self.joint_newton(tol);
+            let out = self.joint_newton(tol, None);
             iterations += self.report.iterations;
             attempts += 1;
             if out.is_ok() {
@@ -238,11 +300,11 @@ impl TendonWorkspace {
     /// most `merit_tol` (1: converged). `Err` with the largest component of the first
     /// fresh Newton step in the scaled shooting unknowns (infinite when unknown)
     /// when it stopped without converging; the iterate is then unspecified.
-    fn joint_newton(&mut self, merit_tol: f64) -> Result<(), f64> {
+    fn joint_newton(&mut self, merit_tol: f64, evaluated: Option<f64>) -> Result<(), f64> {
         let n = self.ws.unknowns();
         let p = self.driven.len();
         let mut first_step = f64::INFINITY;
-        let Some(mut merit) = self.joint_evaluate() else {
+        let Some(mut merit) = evaluated.or_else(|| self.joint_evaluate()) else {
             return Err(first_step);
         };
         for it in 0..JOINT_MAX_ITERATIONS {
@@ -275,7 +337,11 @@ impl TendonWorkspace {
             // Jacobian when there is none or the chord step does not
             // contract the merit by CHORD_CONTRACTION
             let mut chord = self.joint.lu_valid && self.joint.lu_taut == self.taut;
-            if it == 0 && chord && !self.joint.first_chord_ok {
+            // (a row started from an extrapolated point always tries the chord: on
+            // the 443 FTDCR v4 val rows 2 026 -> 2 403 `f64` and 139.2 -> 117.6 dual
+            // right-hand sides a row, 12.86 -> 12.76 M instructions; on 5 000 ticks
+            // of the 1 kHz control loop dual 4.1 -> 0.5 a tick)
+            if it == 0 && chord && !self.joint.first_chord_ok && !self.joint.predicted {
                 self.joint.rows_fresh += 1;
                 chord = self.joint.rows_fresh % CHORD_PROBE == 0;
             }
@@ -317,6 +383,11 @@ impl TendonWorkspace {
                 // inexact inner solves while far away (as the shooting Newton does):
                 // the trial's next holes settle to 1e-7 of the iterate's residual
                 self.joint_inner_tolerance(merit);
+                if fresh {
+                    self.joint_save_branches();
+                }
+                // 0: the step's own active set, 1: trying the full step's, 2: tried
+                let mut switched = 0u8;
                 let mut alpha = 1.0;
                 for _ in 0..if fresh { 8 } else { 1 } {
                     for i in 0..n {
@@ -335,6 +406,21 @@ impl TendonWorkspace {
                             accepted = Some(m);
                             break;
                         }
+                    }
+                    if fresh && switched == 0 && self.taut != self.joint.lu_taut {
+                        // the full step crossed a kink of G (a tendon went slack or
+                        // taut): Newton's step from the iterate with the active set
+                        // found there, before any backtracking (`joint_switch_step`)
+                        switched = 2;
+                        if self.joint_switch_step(n, p) {
+                            switched = 1;
+                            continue;
+                        }
+                    } else if switched == 1 {
+                        // it did not help: back to the step's own set, backtracking
+                        switched = 2;
+                        self.joint_unswitch();
+                        alpha = 1.0;
                     }
                     alpha *= 0.5;
                 }
@@ -471,6 +557,73 @@ impl TendonWorkspace {
                 jb.dz[n + i] = -self.t[i];
             }
         }
+    }
+
+    /// The iterate's two branches of each tendon's NCP function (the stretch gap
+    /// `c_i T_i + L_f,i - l_i` and the slack arm `a_i T_i`), before a fresh step's
+    /// trials overwrite the lengths.
+    fn joint_save_branches(&mut self) {
+        for i in 0..self.driven.len() {
+            let j = self.driven[i];
+            let m = &self.mech[i];
+            let (f, mf) = (self.free[i], self.mean_factor[i]);
+            self.joint.gap0[i] = m.covered(f, self.t[i], mf) - self.lengths[j];
+            self.joint.arm0[i] = (m.compliance(f, mf) + self.geo[i]) * self.t[i];
+        }
+    }
+
+    /// After a fresh step whose full-length trial changed the active set (and was
+    /// not accepted): the semi-smooth Newton step from the iterate with the trial's
+    /// active set, from the same sweep (the generalized Jacobian's rows of the
+    /// switched tendons exchanged, no new sweep). `false` (the step's own set
+    /// restored) when that Jacobian is singular or the step too long. Why: on the
+    /// FTDCR v4 val rows where a tendon goes slack within a row, the projected step
+    /// (a taut tendon's tension clamped at 0) raised the merit 14-50x and the
+    /// backtracking then crept along at 0.5-0.97 of it per fresh sweep until the
+    /// row was handed back.
+    fn joint_switch_step(&mut self, n: usize, p: usize) -> bool {
+        let jb = &mut self.joint;
+        let m = n + p;
+        jb.sw_taut.copy_from_slice(&jb.lu_taut);
+        jb.sw_dz.copy_from_slice(&jb.dz);
+        jb.sw_f.copy_from_slice(&jb.f_prev);
+        jb.lu_taut.copy_from_slice(&self.taut);
+        for i in 0..p {
+            jb.f_prev[n + i] = if jb.lu_taut[i] {
+                jb.gap0[i]
+            } else {
+                jb.arm0[i]
+            };
+        }
+        if !self.joint_assemble() {
+            self.joint_unswitch();
+            return false;
+        }
+        let jb = &mut self.joint;
+        for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
+            *d = -row.iter().zip(&jb.f_prev).map(|(a, b)| a * b).sum::<f64>();
+        }
+        for i in 0..p {
+            if !jb.lu_taut[i] {
+                jb.dz[n + i] = -jb.ts[i];
+            }
+        }
+        let dx_max = jb.dz[..n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
+        if !dx_max.is_finite() || dx_max > MAX_STEP {
+            self.joint_unswitch();
+            return false;
+        }
+        true
+    }
+
+    /// Undo [`Self::joint_switch_step`]: the step, residual and factorisation of the
+    /// step's own active set.
+    fn joint_unswitch(&mut self) {
+        let jb = &mut self.joint;
+        jb.lu_taut.copy_from_slice(&jb.sw_taut);
+        jb.dz.copy_from_slice(&jb.sw_dz);
+        jb.f_prev.copy_from_slice(&jb.sw_f);
+        self.joint_assemble();
     }
 
     /// Broyden's ("good") update of the inverse Jacobian from the accepted step

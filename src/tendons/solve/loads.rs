@@ -56,6 +56,8 @@ impl TendonWorkspace {
         let e = self.n_extra;
         let np = self.theta.len();
         let nc = self.lengths.len();
+        // (the sweep rewrites `lengths`: the next row evaluates its start)
+        self.joint.at_solution = false;
         if !self
             .ws
             .length_sensitivities(&mut self.sens, &mut self.lengths)
