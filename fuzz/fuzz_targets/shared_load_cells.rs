@@ -4,13 +4,9 @@
 //! tendons and an unknown tip load (force x, y and payload mass), every parsed row
 //! through the load estimator.
 //!
-//! Two robots with the same columns ([`Robot`]): the shipped load-cell demo
-//! (`data/load_cells/tdcr_load_cells.toml`) and a small copy of it (five disks per
-//! segment instead of ten, RK4 with 10 steps per section instead of 20) whose forward
-//! solves are cheaper (converged rows on replay: 0.9 ms per forward solve against
-//! 2.6 ms on the shipped scene). The fuzz target runs the small robot on most
-//! inputs and the shipped one on about one in 32 ([`robot_for`]);
-//! `tests/fuzz_regressions.rs` replays every committed input on both.
+//! Two robots with the same columns: the shipped load-cell demo
+//! (`data/load_cells/tdcr_load_cells.toml`) and a small copy of it (`shared_tdcr.rs`,
+//! [`Robot`], [`robot_for`]).
 //!
 //! Budget of one input (both robots): at most [`MAX_ROWS`] rows ticked, forward
 //! solves capped at [`MAX_ITERATIONS`] Newton iterations and
@@ -35,67 +31,23 @@
 use cablesense::estimate::EstimateStatus;
 use cablesense::estimate::TendonLoadEstimator;
 use cablesense::files::load_cells;
-use cablesense::{Integrator, Scene};
+use cablesense::Scene;
 use std::sync::OnceLock;
+
+#[path = "shared_tdcr.rs"]
+mod shared_tdcr;
+pub use shared_tdcr::{robot_for, Robot, MAX_CONTINUATION_STEPS, MAX_ITERATIONS};
 
 const SCENE: &str = include_str!("../../data/load_cells/tdcr_load_cells.toml");
 
-/// Newton iterations of one forward (shooting) solve. A row whose solve stalls ran
-/// 44-97 forward solves of 20-60 ms each on the shipped scene at its own limits (50
-/// and 32): 2-7 s per row, most of it in load continuation; failing rows take
-/// nearly all of an input's time, so the caps are tight (a warm solve converges in
-/// a few iterations).
-pub const MAX_ITERATIONS: usize = 6;
-/// Load-continuation steps of one forward solve (see [`MAX_ITERATIONS`]).
-pub const MAX_CONTINUATION_STEPS: usize = 2;
 /// Estimator iterations per row (the scene's default is 20).
 pub const MAX_ESTIMATE_ITERATIONS: usize = 8;
 /// Rows ticked per input (every row is parsed and checked).
 pub const MAX_ROWS: usize = 3;
-/// Disks per segment of the small robot (every 20 mm). Two disks with 4 or 8 RK4
-/// steps were as costly per input (their rows stalled three times as often).
-const SMALL_DISKS: usize = 5;
-/// RK4 steps per section of the small robot.
-const SMALL_RK4_STEPS: usize = 10;
 
-/// Which robot an input's rows run on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Robot {
-    /// Five disks per segment, RK4 with 10 steps per section.
-    Small,
-    /// `data/load_cells/tdcr_load_cells.toml` (ten disks per segment, RK4 with 20 steps).
-    Shipped,
-}
-
-/// The robot the fuzz target uses for `data`: the shipped scene when the input's
-/// length is 31 modulo 32 (about one input in 32), else the small one. The choice
-/// consumes no byte, so an input's rows are the same on both robots.
-pub fn robot_for(data: &[u8]) -> Robot {
-    if data.len() % 32 == 31 {
-        Robot::Shipped
-    } else {
-        Robot::Small
-    }
-}
-
-/// The shipped scene, with the small robot's disks and integrator when `small`,
-/// numerics and estimator iterations capped.
-pub fn scene(small: bool) -> Scene {
-    let mut scene = Scene::from_toml_str(SCENE).expect("shipped scene parses");
-    if small {
-        for s in &mut scene.robot.sections {
-            let g = s.guides.as_mut().expect("shipped sections have disks");
-            g.count = SMALL_DISKS;
-            g.spacing_m = s.length_m / SMALL_DISKS as f64;
-            g.first_offset_m = g.spacing_m;
-        }
-        scene.numerics.integrator = Integrator::Rk4 {
-            steps_per_section: SMALL_RK4_STEPS,
-        };
-    }
-    let n = &mut scene.numerics;
-    n.max_iterations = n.max_iterations.min(MAX_ITERATIONS);
-    n.max_continuation_steps = n.max_continuation_steps.min(MAX_CONTINUATION_STEPS);
+/// The shipped scene for `robot` (`shared_tdcr::scene`), estimator iterations capped.
+pub fn scene(robot: Robot) -> Scene {
+    let mut scene = shared_tdcr::scene(SCENE, robot);
     let e = scene.estimate.as_mut().expect("shipped scene estimates");
     e.max_iterations = e.max_iterations.min(MAX_ESTIMATE_ITERATIONS);
     scene
@@ -110,7 +62,7 @@ fn template(robot: Robot) -> &'static (Scene, TendonLoadEstimator) {
         Robot::Shipped => &SHIPPED,
     };
     cell.get_or_init(|| {
-        let scene = scene(robot == Robot::Small);
+        let scene = scene(robot);
         let est = load_cells::estimator(&scene).expect("scene builds");
         (scene, est)
     })

@@ -1,0 +1,69 @@
+//! The two robots of the tendon fuzz targets (`readings_stream`, `load_cells_stream`),
+//! included by `shared_readings.rs` and `shared_load_cells.rs` (and through them by
+//! `tests/fuzz_regressions.rs`).
+//!
+//! Each target runs a shipped scene and a small copy of it (five disks per segment
+//! instead of ten, RK4 with 10 steps per section instead of 20) whose forward solves
+//! are cheaper (converged rows on replay: 0.9 ms per forward solve against 2.6 ms on
+//! the shipped scene). The fuzz target runs the small robot on most inputs and the
+//! shipped one on about one in 32 ([`robot_for`]); `tests/fuzz_regressions.rs` replays
+//! every committed input on both.
+
+#![allow(dead_code)]
+
+use cablesense::{Integrator, Scene};
+
+/// Newton iterations of one forward (shooting) solve. A row whose solve stalls ran
+/// 44-97 forward solves of 20-60 ms each on the shipped scene at its own limits (50
+/// and 32): 2-7 s per row, most of it in load continuation; failing rows take
+/// nearly all of an input's time, so the caps are tight (a warm solve converges in
+/// a few iterations).
+pub const MAX_ITERATIONS: usize = 6;
+/// Load-continuation steps of one forward solve (see [`MAX_ITERATIONS`]).
+pub const MAX_CONTINUATION_STEPS: usize = 2;
+/// Disks per segment of the small robot (every 20 mm). Two disks with 4 or 8 RK4
+/// steps were as costly per input (their rows stalled three times as often).
+const SMALL_DISKS: usize = 5;
+/// RK4 steps per section of the small robot.
+const SMALL_RK4_STEPS: usize = 10;
+
+/// Which robot an input's rows run on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Robot {
+    /// Five disks per segment, RK4 with 10 steps per section.
+    Small,
+    /// The target's shipped scene (ten disks per segment, RK4 with 20 steps).
+    Shipped,
+}
+
+/// The robot the fuzz target uses for `data`: the shipped scene when the input's
+/// length is 31 modulo 32 (about one input in 32), else the small one. The choice
+/// consumes no byte, so an input's rows are the same on both robots.
+pub fn robot_for(data: &[u8]) -> Robot {
+    if data.len() % 32 == 31 {
+        Robot::Shipped
+    } else {
+        Robot::Small
+    }
+}
+
+/// The scene `text` for `robot`: with the small robot's disks and integrator when it
+/// is [`Robot::Small`], and the forward solve's numerics capped.
+pub fn scene(text: &str, robot: Robot) -> Scene {
+    let mut scene = Scene::from_toml_str(text).expect("shipped scene parses");
+    if robot == Robot::Small {
+        for s in &mut scene.robot.sections {
+            let g = s.guides.as_mut().expect("shipped sections have disks");
+            g.count = SMALL_DISKS;
+            g.spacing_m = s.length_m / SMALL_DISKS as f64;
+            g.first_offset_m = g.spacing_m;
+        }
+        scene.numerics.integrator = Integrator::Rk4 {
+            steps_per_section: SMALL_RK4_STEPS,
+        };
+    }
+    let n = &mut scene.numerics;
+    n.max_iterations = n.max_iterations.min(MAX_ITERATIONS);
+    n.max_continuation_steps = n.max_continuation_steps.min(MAX_CONTINUATION_STEPS);
+    scene
+}
