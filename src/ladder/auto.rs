@@ -265,22 +265,42 @@ impl AutoChoice {
 }
 
 /// Solutions of one model over the probe: tips, lengths, median time.
-struct Probe {
-    tips: Vec<nalgebra::Vector3<f64>>,
-    lengths: Vec<Vec<f64>>,
-    time_s: f64,
-    status: Vec<SolveStatus>,
+pub(super) struct Probe {
+    pub(super) tips: Vec<nalgebra::Vector3<f64>>,
+    pub(super) lengths: Vec<Vec<f64>>,
+    pub(super) time_s: f64,
+    pub(super) status: Vec<SolveStatus>,
 }
 
 impl Probe {
-    /// First probe factor where the model did not converge.
-    fn failed(&self, probes: &[(f64, Loads)]) -> Option<(f64, SolveStatus)> {
+    /// First probe (its label in `labels`: a load factor, or a row's position) where
+    /// the model did not converge.
+    pub(super) fn failed(&self, labels: &[f64]) -> Option<(f64, SolveStatus)> {
         self.status
             .iter()
-            .zip(probes)
+            .zip(labels)
             .find(|(s, _)| !s.is_converged())
-            .map(|(s, (f, _))| (*f, *s))
+            .map(|(s, f)| (*f, *s))
     }
+
+    /// The probes where `keep` is true.
+    pub(super) fn kept(&self, keep: &[bool]) -> Self {
+        Self {
+            tips: filter(&self.tips, keep),
+            lengths: filter(&self.lengths, keep),
+            status: filter(&self.status, keep),
+            time_s: self.time_s,
+        }
+    }
+}
+
+/// The items of `v` where `keep` is true.
+fn filter<T: Clone>(v: &[T], keep: &[bool]) -> Vec<T> {
+    v.iter()
+        .zip(keep)
+        .filter(|(_, k)| **k)
+        .map(|(x, _)| x.clone())
+        .collect()
 }
 
 fn run_probe(
@@ -339,7 +359,9 @@ pub(crate) fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-fn distance(a: &Probe, b: &Probe) -> (f64, f64) {
+/// Largest tip distance and cable-length difference between two probes (m;
+/// infinite where either is NaN).
+pub(super) fn distance(a: &Probe, b: &Probe) -> (f64, f64) {
     let mut tip: f64 = 0.0;
     let mut cable: f64 = 0.0;
     for (ta, tb) in a.tips.iter().zip(&b.tips) {
@@ -398,81 +420,107 @@ pub fn choose(
             "the reference did not converge at any probe load".into(),
         ));
     }
-    let pick = |i: usize| keep[i];
-    let probes: Vec<(f64, Loads)> = (0..probes.len())
-        .filter(|&i| pick(i))
-        .map(|i| probes[i].clone())
-        .collect();
-    let refp = Probe {
-        tips: (0..keep.len())
-            .filter(|&i| pick(i))
-            .map(|i| all.tips[i])
-            .collect(),
-        lengths: (0..keep.len())
-            .filter(|&i| pick(i))
-            .map(|i| all.lengths[i].clone())
-            .collect(),
-        status: vec![SolveStatus::Converged; probes.len()],
-        time_s: all.time_s,
-    };
+    let probes: Vec<(f64, Loads)> = filter(&probes, &keep);
+    let labels: Vec<f64> = probes.iter().map(|(f, _)| *f).collect();
+    let refp = all.kept(&keep);
     // the reference's own error: the same model at a 100x looser tolerance
-    let (ref_tip, ref_cable) = match &settings.reference {
-        Rung::Rod(s) => {
-            let mut loose = s.clone();
-            if let Integrator::Adaptive { tol, max_steps } = s.integrator {
-                loose.integrator = Integrator::Adaptive {
-                    tol: tol * 100.0,
-                    max_steps,
-                };
-            } else if let Integrator::Rk4 { steps_per_section } = s.integrator {
-                loose.integrator = Integrator::Rk4 {
-                    steps_per_section: (steps_per_section / 2).max(1),
-                };
-            }
-            let mut m = Rung::Rod(loose).build(robot)?;
+    let (ref_tip, ref_cable) = match loose_reference(&settings.reference) {
+        Some((loose, k)) => {
+            let mut m = loose.build(robot)?;
             let p = run_probe(m.as_mut(), &probes, 0)?;
             let (t, c) = distance(&p, &refp);
-            let k = if matches!(s.integrator, Integrator::Adaptive { .. }) {
-                100.0
-            } else {
-                15.0 // RK4 step doubling: error ratio 2^4 - 1 (Richardson)
-            };
             (t / k, c / k)
         }
-        _ => (f64::NAN, f64::NAN),
+        None => (f64::NAN, f64::NAN),
     };
     let mut reports = Vec::with_capacity(candidates.len());
     for rung in candidates {
         let mut model = rung.build(robot)?;
         let p = run_probe(model.as_mut(), &probes, settings.repetitions)?;
         let (tip, cable) = distance(&p, &refp);
-        let verdict = if let Some((probe_factor, status)) = p.failed(&probes) {
-            Verdict::Failed {
-                probe_factor,
-                status,
-            }
-        } else if tip > settings.tip_tolerance_m {
-            Verdict::TipError {
-                error_m: tip,
-                tolerance_m: settings.tip_tolerance_m,
-            }
-        } else if cable > settings.cable_tolerance_m {
-            Verdict::CableError {
-                error_m: cable,
-                tolerance_m: settings.cable_tolerance_m,
-            }
-        } else {
-            Verdict::Slower
-        };
-        reports.push(CandidateReport {
-            rung: rung.clone(),
-            label: rung.label(),
-            tip_error_m: tip,
-            cable_error_m: cable,
-            time_s: p.time_s,
-            verdict,
-        });
+        reports.push(report(rung, &p, &labels, tip, cable, settings));
     }
+    Ok(finish(
+        reports,
+        settings,
+        labels,
+        (ref_tip, ref_cable),
+        reference_time_s,
+    ))
+}
+
+/// The reference at a looser tolerance and the factor by which its distance from the
+/// reference overestimates the reference's own error: adaptive at 100x the
+/// tolerance (error linear in tol), RK4 at half the steps (Richardson: 2^4 - 1).
+/// `None` for a curvature rung (its error is not a tolerance's).
+pub(super) fn loose_reference(reference: &Rung) -> Option<(Rung, f64)> {
+    let Rung::Rod(s) = reference else {
+        return None;
+    };
+    let mut loose = s.clone();
+    let k = match s.integrator {
+        Integrator::Adaptive { tol, max_steps } => {
+            loose.integrator = Integrator::Adaptive {
+                tol: tol * 100.0,
+                max_steps,
+            };
+            100.0
+        }
+        Integrator::Rk4 { steps_per_section } => {
+            loose.integrator = Integrator::Rk4 {
+                steps_per_section: (steps_per_section / 2).max(1),
+            };
+            15.0
+        }
+    };
+    Some((Rung::Rod(loose), k))
+}
+
+/// A candidate's verdict against the targets (before the cheapest is picked).
+pub(super) fn report(
+    rung: &Rung,
+    p: &Probe,
+    labels: &[f64],
+    tip: f64,
+    cable: f64,
+    settings: &AutoSettings,
+) -> CandidateReport {
+    let verdict = if let Some((probe_factor, status)) = p.failed(labels) {
+        Verdict::Failed {
+            probe_factor,
+            status,
+        }
+    } else if tip > settings.tip_tolerance_m {
+        Verdict::TipError {
+            error_m: tip,
+            tolerance_m: settings.tip_tolerance_m,
+        }
+    } else if cable > settings.cable_tolerance_m {
+        Verdict::CableError {
+            error_m: cable,
+            tolerance_m: settings.cable_tolerance_m,
+        }
+    } else {
+        Verdict::Slower
+    };
+    CandidateReport {
+        rung: rung.clone(),
+        label: rung.label(),
+        tip_error_m: tip,
+        cable_error_m: cable,
+        time_s: p.time_s,
+        verdict,
+    }
+}
+
+/// Pick the cheapest candidate within both targets and assemble the choice.
+pub(super) fn finish(
+    mut reports: Vec<CandidateReport>,
+    settings: &AutoSettings,
+    labels: Vec<f64>,
+    (ref_tip, ref_cable): (f64, f64),
+    reference_time_s: f64,
+) -> AutoChoice {
     let picked = reports
         .iter()
         .enumerate()
@@ -482,17 +530,17 @@ pub fn choose(
     if let Some(i) = picked {
         reports[i].verdict = Verdict::Picked;
     }
-    Ok(AutoChoice {
+    AutoChoice {
         picked,
         rung: picked.map_or_else(|| settings.reference.clone(), |i| reports[i].rung.clone()),
         fallback: picked.is_none(),
         candidates: reports,
-        probe_factors: probes.iter().map(|(f, _)| *f).collect(),
+        probe_factors: labels,
         reference: settings.reference.label(),
         reference_tip_error_m: ref_tip,
         reference_cable_error_m: ref_cable,
         reference_time_s,
-    })
+    }
 }
 
 #[cfg(test)]

@@ -27,6 +27,7 @@
 mod anderson;
 mod arc;
 mod auto;
+mod auto_readings;
 mod cc;
 mod kinematics;
 mod pcc;
@@ -38,6 +39,7 @@ pub use arc::{arc_pose, ArcJacobian};
 pub use auto::{
     choose, parse_length, AutoChoice, AutoSettings, CandidateReport, LengthParseError, Verdict,
 };
+pub use auto_readings::{choose_readings, probe_rows, PROBE_ROWS};
 pub use cc::{CcSettings, ConstantCurvature};
 pub use kinematics::TendonKinematics;
 pub use pcc::{PccSettings, PiecewiseConstantCurvature};

@@ -8,9 +8,10 @@
 //! pretension, slack and the scene's loads, solved through the shooting model with the
 //! rung's [`SolverSettings`]).
 //!
-//! The automatic choice ([`super::choose`]) probes *loads*, not readings, so it does not
-//! rank these models; `cablesense pareto` does (its TDCR rows, module
-//! `crate::experiments`).
+//! The automatic choice over loads ([`super::choose`]) does not rank these models;
+//! [`super::choose_readings`] does, on rows of readings (`cablesense solve SCENE
+//! --readings FILE --model auto`), and `cablesense pareto` charts them (its TDCR rows,
+//! module `crate::experiments`).
 
 use super::{CcSettings, ConstantCurvature, LadderError, LadderReport, PccSettings};
 use super::{PiecewiseConstantCurvature, Rung};

@@ -171,6 +171,102 @@ pub fn stream(
     Ok((solved, converged, bad))
 }
 
+/// Stream `reader` through a curvature rung of the readings ladder (CC or PCC: the
+/// constant-curvature tendon kinematics, no mechanics, so no tensions; `taut` says
+/// which tendons the kinematics uses). The readings are used as given (the scene's
+/// `[readings]` time offset and backlash are the rod solve's conditioning, not
+/// applied here). Returns (rows solved, rows converged, bad rows).
+pub fn stream_kinematics(
+    scene: &Scene,
+    scene_path: &Path,
+    rung: &cablesense::ladder::Rung,
+    reader: Box<dyn BufRead>,
+    output: Output,
+) -> anyhow::Result<(usize, usize, usize)> {
+    let ws = scene
+        .tendon_workspace()
+        .with_context(|| format!("{}: building the tendon model", scene_path.display()))?;
+    let mut parser: ReadingsParser = scene.readings_parser(&ws);
+    let robot = ws.workspace().robot().clone();
+    let mut model = rung
+        .build_readings(&robot, &scene.loads)
+        .with_context(|| format!("{}: building {}", scene_path.display(), rung.label()))?;
+    let label = rung.label();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    if output == Output::Text {
+        writeln!(
+            out,
+            "model {label}: constant-curvature tendon kinematics (no tensions)"
+        )?;
+    }
+    let (mut solved, mut converged, mut bad) = (0, 0, 0);
+    for (i, line) in reader.lines().enumerate() {
+        let row = match line.map(|l| parser.line(i + 1, &l)) {
+            Err(e) => {
+                bad += 1;
+                emit_error(&mut out, output, i + 1, "line", &format!("unreadable: {e}"))?;
+                continue;
+            }
+            Ok(Ok(None)) => continue,
+            Ok(Ok(Some(r))) => r,
+            Ok(Err(e)) => {
+                bad += 1;
+                emit_error(&mut out, output, e.line, &e.field, &e.why)?;
+                continue;
+            }
+        };
+        let t0 = std::time::Instant::now();
+        let rep = match model.solve_readings(&row.readings_m, cablesense::Start::Warm) {
+            Ok(r) => r,
+            Err(e) => {
+                bad += 1;
+                emit_error(&mut out, output, row.line, "readings", &e.to_string())?;
+                continue;
+            }
+        };
+        let elapsed = t0.elapsed().as_secs_f64();
+        solved += 1;
+        converged += usize::from(rep.status.is_converged());
+        let tip = model.tip_position();
+        match output {
+            Output::Json => writeln!(
+                out,
+                "{}",
+                json!({
+                    "line": row.line,
+                    "t_s": row.t_s,
+                    "model": label,
+                    "status": rep.status,
+                    "tip_position_m": [tip.x, tip.y, tip.z],
+                    "measured_tip_m": row.measured_tip_m,
+                    "readings_m": row.readings_m,
+                    "taut": model.taut(),
+                    "elapsed_s": elapsed,
+                })
+            )?,
+            Output::Text => {
+                let t = tip * 1e3;
+                let measured = row
+                    .measured_tip_m
+                    .map(|m| format!("[{:8.2} {:8.2} {:8.2}]", m[0] * 1e3, m[1] * 1e3, m[2] * 1e3))
+                    .unwrap_or_else(|| "-".into());
+                writeln!(
+                    out,
+                    "line {:5}  {:<14} tip [{:8.2} {:8.2} {:8.2}] mm  measured {measured}",
+                    row.line,
+                    format!("{:?}", rep.status).to_lowercase(),
+                    t.x,
+                    t.y,
+                    t.z
+                )?
+            }
+        }
+        out.flush()?;
+    }
+    Ok((solved, converged, bad))
+}
+
 fn emit_error(
     out: &mut impl Write,
     output: Output,

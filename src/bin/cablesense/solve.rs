@@ -40,34 +40,79 @@ pub struct Args {
     /// Solve every row of this readings file (CSV or JSON lines) of a scene with
     /// displacement-driven tendons, warm-started row to row: tip per row beside the
     /// measured one, tensions and slack flags (`--json`: one object per row;
-    /// `--samples`: every row's backbone, with a `line` column).
+    /// `--samples`: every row's backbone, with a `line` column). With `--model auto`
+    /// the readings ladder (CC/PCC kinematics, rod rungs through the tendon solve) is
+    /// ranked on up to `--probe-rows` evenly spaced rows of the file and the pick solves every row
+    /// (`--json`: the choice is the first line, `{"model_choice": ...}`); `--model
+    /// cc`, `pcc/none/16`, ... name a rung (the kinematics rungs report no tensions).
     #[arg(long)]
     readings: Option<PathBuf>,
+    /// Rows of the readings file `--model auto` ranks the models on (evenly spaced,
+    /// first and last included).
+    #[arg(long = "probe-rows", default_value_t = ladder::PROBE_ROWS)]
+    probe_rows: usize,
 }
 
-/// `solve SCENE --readings FILE`: exit 0 when every row converged.
+/// `solve SCENE --readings FILE`: exit 0 when every row converged. `--model scene`
+/// solves with the scene's numerics; `auto` ranks the readings ladder on a sample of
+/// the file's rows ([`ladder::choose_readings`]) and solves with the pick; a label
+/// names a rung of the readings ladder (or any rod rung).
 fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Result<ExitCode> {
-    use crate::readings::{is_tendon_scene, stream, Output};
+    use crate::readings::{is_tendon_scene, stream, stream_kinematics, Output};
     anyhow::ensure!(
         is_tendon_scene(scene),
         "{}: no cable has actuation = \"displacement\": --readings needs displacement-driven tendons",
         a.scene.display()
     );
-    let file = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
-    let mut samples = match &a.samples {
-        Some(p) => Some(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?,
-        )),
-        None => None,
+    let open = || -> anyhow::Result<Box<dyn std::io::BufRead>> {
+        let file =
+            std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
+        Ok(Box::new(std::io::BufReader::new(file)))
     };
     let output = if a.json { Output::Json } else { Output::Text };
-    let (solved, converged, bad) = stream(
-        scene,
-        &a.scene,
-        Box::new(std::io::BufReader::new(file)),
-        output,
-        samples.as_mut().map(|w| w as &mut dyn std::io::Write),
-    )?;
+    let rung = match a.model.as_str() {
+        "scene" => Rung::Rod(scene.numerics.clone()),
+        "auto" => {
+            let choice = choose_for_readings(a, scene, open()?)?;
+            match output {
+                Output::Json => println!("{}", serde_json::json!({ "model_choice": choice })),
+                Output::Text => print_choice(&choice, a.tol, a.tol_cable, "probe rows"),
+            }
+            choice.rung
+        }
+        label => readings_rung_by_label(&scene.build_robot()?, label)?,
+    };
+    let (solved, converged, bad) = match rung {
+        Rung::Rod(numerics) => {
+            let mut samples = match &a.samples {
+                Some(p) => Some(std::io::BufWriter::new(
+                    std::fs::File::create(p)
+                        .with_context(|| format!("creating {}", p.display()))?,
+                )),
+                None => None,
+            };
+            let scene = Scene {
+                numerics,
+                ..scene.clone()
+            };
+            stream(
+                &scene,
+                &a.scene,
+                open()?,
+                output,
+                samples.as_mut().map(|w| w as &mut dyn std::io::Write),
+            )?
+        }
+        other => {
+            if a.samples.is_some() {
+                eprintln!(
+                    "note: --samples needs a rod rung; {} has no backbone samples",
+                    other.label()
+                );
+            }
+            stream_kinematics(scene, &a.scene, &other, open()?, output)?
+        }
+    };
     if !a.json {
         println!("{solved} rows solved, {converged} converged, {bad} bad rows");
     }
@@ -76,6 +121,68 @@ fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Re
     } else {
         ExitCode::from(1)
     })
+}
+
+/// `--model auto` on a readings file: the readings ladder ranked on up to
+/// [`ladder::PROBE_ROWS`] rows of the file, evenly spaced (rows the parser rejects
+/// are skipped here; the stream reports them).
+fn choose_for_readings(
+    a: &Args,
+    scene: &Scene,
+    reader: Box<dyn std::io::BufRead>,
+) -> anyhow::Result<AutoChoice> {
+    use std::io::BufRead;
+    let ws = scene.tendon_workspace()?;
+    let mut parser = scene.readings_parser(&ws);
+    let mut rows = Vec::new();
+    for (i, line) in reader.lines().enumerate() {
+        if let Ok(Some(r)) = parser.line(i + 1, &line?) {
+            rows.push(r.readings_m);
+        }
+    }
+    anyhow::ensure!(
+        !rows.is_empty(),
+        "{}: no usable row of readings to rank the models on",
+        a.readings
+            .as_ref()
+            .map_or(String::new(), |p| p.display().to_string())
+    );
+    let robot = scene.build_robot()?;
+    let settings = AutoSettings {
+        tip_tolerance_m: a.tol,
+        cable_tolerance_m: a.tol_cable,
+        ..AutoSettings::default()
+    };
+    Ok(ladder::choose_readings(
+        &robot,
+        &scene.loads,
+        &ladder::probe_rows(&rows, a.probe_rows),
+        &settings,
+        &ladder::readings_ladder(&robot),
+    )?)
+}
+
+/// The rung of the readings ladder with this label, or any rod rung of the full
+/// ladder; the error lists the readings ladder's labels.
+fn readings_rung_by_label(robot: &cablesense::Robot, label: &str) -> anyhow::Result<Rung> {
+    let ladder = ladder::readings_ladder(robot);
+    if let Some(r) = ladder.iter().find(|r| r.label() == label) {
+        return Ok(r.clone());
+    }
+    if let Some(r) = ladder::full_ladder(robot)
+        .into_iter()
+        .find(|r| r.label() == label && matches!(r, Rung::Rod(_)))
+    {
+        return Ok(r);
+    }
+    anyhow::bail!(
+        "unknown --model `{label}` for readings; use scene, auto or one of: {}",
+        ladder
+            .iter()
+            .map(Rung::label)
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
 }
 
 fn parse_len(s: &str) -> Result<f64, String> {
@@ -125,7 +232,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         label => (rung_by_label(&robot, label, "scene, auto")?, None),
     };
     if let (Some(c), false) = (&choice, a.json) {
-        print_choice(c, a.tol, a.tol_cable);
+        print_choice(c, a.tol, a.tol_cable, "probe load factors");
     }
     match rung {
         Rung::Rod(settings) => solve_rod(&a, &scene, settings, choice.as_ref()),
@@ -133,10 +240,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
 }
 
-/// What `--model auto` picked and why the cheaper rungs were rejected.
-fn print_choice(c: &AutoChoice, tol: f64, tol_cable: f64) {
+/// What `--model auto` picked and why the cheaper rungs were rejected; `probe` names
+/// what `c.probe_factors` holds (load factors, or the positions of probe rows).
+fn print_choice(c: &AutoChoice, tol: f64, tol_cable: f64, probe: &str) {
     println!(
-        "model auto: targets tip {:.4} mm, cable {:.4} um; probe load factors {:?}; errors against {} (its own error ~{:.1e} m tip, {:.1e} m cable)",
+        "model auto: targets tip {:.4} mm, cable {:.4} um; {probe} {:?}; errors against {} (its own error ~{:.1e} m tip, {:.1e} m cable)",
         tol * 1e3,
         tol_cable * 1e6,
         c.probe_factors,
