@@ -28,10 +28,11 @@
 //! error for that row). A missing or empty measurement (`tension_`, `length_`) is
 //! *not measured in that row* (`NaN` in [`ReadingRow`]): a measurement is never
 //! carried from an earlier row, since a stale value would be fitted as if it were
-//! new data; a row with no measurement at all is estimated as unobservable. NaN, infinity or text where a number belongs is an error for
-//! that row only, naming the line and column; the stream goes on. A UTF-8 byte-order
-//! mark and CRLF line ends are accepted. A header without any tendon column is an
-//! error, and the parser then waits for the next line that is a valid header.
+//! new data; a row with no measurement at all is estimated as unobservable. NaN,
+//! infinity or text where a number belongs is an error for that row only, naming
+//! the line and column; the stream goes on. A UTF-8 byte-order mark and CRLF line
+//! ends are accepted. A header without any tendon column is an error, and the
+//! parser then waits for the next line that is a valid header.
 
 use serde::{Deserialize, Serialize};
 
