@@ -10,8 +10,9 @@
 //!   `1/sigma_T^2` with `sigma_T` = [`EstimateSpec::load_cell_sigma_n`] (default
 //!   0.01 N);
 //! * the **length change** of each passive (measuring) cable the row gives (m, from
-//!   the reference state: every unknown at its `reference`, readings at `q = 0`):
-//!   residual as in the cable-length estimator, weight `1/noise_m^2`.
+//!   the reference state: every unknown at its `reference`, readings at `q = 0`;
+//!   `length_<cable>` columns of a readings file): residual as in the cable-length
+//!   estimator, weight `1/noise_m^2`.
 //!
 //! **Displacement residuals.** The readings are inputs, not measurements: the
 //! forward solve matches every driven tendon's displacement exactly (its NCP residual

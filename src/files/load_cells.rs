@@ -13,10 +13,15 @@
 //! * every driven tendon's load cell: the model's tension at those loads and readings
 //!   ([`crate::estimate::TendonLoadEstimator::predict`]) plus Gaussian noise of the
 //!   scene's `load_cell_sigma_n` (xorshift64 and Box-Muller from `seed`), clipped
-//!   at 0 (a load cell does not read negative).
+//!   at 0 (a load cell does not read negative);
+//! * every passive (measuring) cable's length change from the reference state: the
+//!   model's plus Gaussian noise of the scene's `noise_m` (the same generator, drawn
+//!   after the load cells; a scene without passive cables draws nothing).
 //!
-//! Columns: `t_s`, each tendon's reading column (m), `tension_<cable>` (N), and the
-//! true unknowns as `true_<name>` (ignored by the readings parser, for comparison).
+//! Columns: `t_s`, each tendon's reading column (unit `[readings] scale_m`),
+//! `tension_<cable>` (N), `length_<cable>` per passive cable (unit `[readings]
+//! length_scale_m`, default `scale_m`), and the true unknowns as `true_<name>`
+//! (ignored by the readings parser, for comparison).
 
 use crate::estimate::{EstimateError, TendonLoadEstimator};
 use crate::files::scene::Scene;
@@ -112,12 +117,25 @@ pub fn synthesize(scene: &Scene, recipe: &Recipe) -> Result<String, EstimateErro
     let tendons: Vec<String> = model.tendons().to_vec();
     let columns: Vec<String> = model.estimator().model().tendons().columns().to_vec();
     let nt = tendons.len();
+    let robot = model.estimator().model().tendons().workspace().robot();
+    let passive: Vec<(usize, String)> = robot
+        .cables()
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.actuation == crate::tendons::Actuation::Passive)
+        .map(|(j, c)| (j, c.name.clone()))
+        .collect();
+    let units = scene.readings.clone().unwrap_or_default();
+    let (scale, length_scale) = (units.scale_m, units.length_scale());
     let mut out = String::from("t_s");
     for c in &columns {
         write!(out, ",{c}").ok();
     }
     for t in &tendons {
         write!(out, ",tension_{t}").ok();
+    }
+    for (_, c) in &passive {
+        write!(out, ",length_{c}").ok();
     }
     for n in &names {
         write!(out, ",true_{n}").ok();
@@ -153,10 +171,14 @@ pub fn synthesize(scene: &Scene, recipe: &Recipe) -> Result<String, EstimateErro
         }
         write!(out, "{t:.3}").ok();
         for v in &q {
-            write!(out, ",{v:.9e}").ok();
+            write!(out, ",{:.9e}", v / scale).ok();
         }
         for v in &pred.tensions_n {
             write!(out, ",{:.6}", (v + sigma * noise.sample()).max(0.0)).ok();
+        }
+        for (j, _) in &passive {
+            let l = pred.length_changes_m[*j] + spec.noise_m * noise.sample();
+            write!(out, ",{:.9e}", l / length_scale).ok();
         }
         for v in &theta {
             write!(out, ",{v:.9e}").ok();

@@ -10,15 +10,29 @@
 //!   `tension_` column naming no displacement-driven tendon is an error naming the
 //!   line and column (CSV: reported on the header line, the column is then ignored
 //!   and the stream goes on; JSON lines: an error for that row);
+//! - optional `length_<cable>`: the length change of a passive (measuring) cable
+//!   from the reference state (every unknown load at its reference, readings 0),
+//!   positive = longer, in the unit `[readings] length_scale_m` says (metres per
+//!   unit; default: `scale_m`, the unit of the tendon columns): the encoder
+//!   measurements of `estimate::TendonLoadEstimator`. Only cables with
+//!   `actuation = "passive"` have one (the parser learns them from
+//!   [`ReadingsParser::with_measuring_cables`]; `Scene::readings_parser` does this);
+//!   a `length_` column naming no passive cable (an unknown name, or a driven
+//!   tendon, whose reading is an input) is an error naming the line and column, as
+//!   for `tension_`;
 //! - optional measured tip `[readings] measured_tip` (three columns, unit
 //!   `measured_scale_m`), carried along for comparison;
 //! - anything else (a pattern label, other sensors) is ignored.
 //!
 //! A missing or empty reading keeps that tendon's last value (before any value: an
-//! error for that row). NaN, infinity or text where a number belongs is an error for
-//! that row only, naming the line and column; the stream goes on. A UTF-8 byte-order
-//! mark and CRLF line ends are accepted. A header without any tendon column is an
-//! error, and the parser then waits for the next line that is a valid header.
+//! error for that row). A missing or empty measurement (`tension_`, `length_`) is
+//! *not measured in that row* (`NaN` in [`ReadingRow`]): a measurement is never
+//! carried from an earlier row, since a stale value would be fitted as if it were
+//! new data; a row with no measurement at all is estimated as unobservable. NaN,
+//! infinity or text where a number belongs is an error for that row only, naming
+//! the line and column; the stream goes on. A UTF-8 byte-order mark and CRLF line
+//! ends are accepted. A header without any tendon column is an error, and the
+//! parser then waits for the next line that is a valid header.
 
 use serde::{Deserialize, Serialize};
 
@@ -37,6 +51,11 @@ pub struct ReadingsSpec {
     pub measured_tip: Option<[String; 3]>,
     /// Metres per unit of `measured_tip` (default 1).
     pub measured_scale_m: f64,
+    /// Metres per unit of the `length_<cable>` columns (measuring cables' length
+    /// changes, > 0). Default: none, i.e. the same unit as the tendon columns
+    /// (`scale_m`); set it when the encoders log in another unit than the servos.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_scale_m: Option<f64>,
     /// Time offset between the servo log and the measured tip (s, default 0): the
     /// row stamped `t` is solved with the readings linearly interpolated at
     /// `t - time_offset_s` (> 0: the capture lags the log), inside blocks of rows
@@ -57,6 +76,7 @@ impl Default for ReadingsSpec {
             time_column: "t_s".into(),
             measured_tip: None,
             measured_scale_m: 1.0,
+            length_scale_m: None,
             time_offset_s: 0.0,
             backlash_m: 0.0,
         }
@@ -68,9 +88,18 @@ impl ReadingsSpec {
     pub fn validate(&self) -> Result<(), crate::ModelError> {
         crate::ModelError::positive("readings.scale_m", self.scale_m)?;
         crate::ModelError::positive("readings.measured_scale_m", self.measured_scale_m)?;
+        if let Some(l) = self.length_scale_m {
+            crate::ModelError::positive("readings.length_scale_m", l)?;
+        }
         crate::ModelError::finite("readings.time_offset_s", self.time_offset_s)?;
         crate::ModelError::non_negative("readings.backlash_m", self.backlash_m)?;
         Ok(())
+    }
+
+    /// Metres per unit of the `length_<cable>` columns: `length_scale_m`, else
+    /// `scale_m`.
+    pub fn length_scale(&self) -> f64 {
+        self.length_scale_m.unwrap_or(self.scale_m)
     }
 }
 
@@ -85,8 +114,21 @@ pub struct ReadingRow {
     pub readings_m: Vec<f64>,
     /// Load-cell tension per driven tendon (N), `NaN` where the row has none.
     pub tensions_n: Vec<f64>,
+    /// Length change from the reference state per cable of the robot (m, in robot
+    /// cable order), `NaN` where the row has no `length_<cable>` value and for every
+    /// cable that is not a measuring cable; empty when the parser knows no cables
+    /// ([`ReadingsParser::with_measuring_cables`] not called).
+    pub length_changes_m: Vec<f64>,
     /// Measured tip (m), if mapped and present.
     pub measured_tip_m: Option<[f64; 3]>,
+}
+
+impl ReadingRow {
+    /// The length changes in the form `TendonLoadEstimator::tick` takes: `None`
+    /// when the parser knows no cables.
+    pub fn length_changes(&self) -> Option<&[f64]> {
+        (!self.length_changes_m.is_empty()).then_some(&self.length_changes_m[..])
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,6 +136,7 @@ enum Col {
     Time,
     Reading(usize),
     Tension(usize),
+    Length(usize),
     Tip(usize),
     Ignored,
 }
@@ -103,6 +146,7 @@ enum Col {
 pub struct ReadingsParser {
     columns: Vec<String>,
     cables: Vec<String>,
+    measuring: Vec<Option<String>>,
     spec: ReadingsSpec,
     header: Option<Vec<Col>>,
     names: Vec<String>,
@@ -112,18 +156,28 @@ pub struct ReadingsParser {
 
 impl ReadingsParser {
     /// `columns[i]` is driven tendon `i`'s reading column, `cables[i]` its cable name
-    /// (for `tension_<cable>`).
+    /// (for `tension_<cable>`). No `length_<cable>` columns: see
+    /// [`Self::with_measuring_cables`].
     pub fn new(columns: Vec<String>, cables: Vec<String>, spec: ReadingsSpec) -> Self {
         let n = columns.len();
         Self {
             columns,
             cables,
+            measuring: Vec::new(),
             spec,
             header: None,
             names: Vec::new(),
             last: vec![f64::NAN; n],
             json: None,
         }
+    }
+
+    /// Read `length_<cable>` columns: `measuring[j]` is robot cable `j`'s name if
+    /// it is a passive (measuring) cable, else `None`; rows then carry
+    /// [`ReadingRow::length_changes_m`] with one entry per robot cable.
+    pub fn with_measuring_cables(mut self, measuring: Vec<Option<String>>) -> Self {
+        self.measuring = measuring;
+        self
     }
 
     /// A non-fatal error: even a bad header is not fatal here (the parser waits for
@@ -142,6 +196,11 @@ impl ReadingsParser {
             .and_then(|n| self.cables.iter().position(|c| c == n))
         {
             Col::Tension(i)
+        } else if let Some(j) = name
+            .strip_prefix("length_")
+            .and_then(|n| self.measuring.iter().position(|c| c.as_deref() == Some(n)))
+        {
+            Col::Length(j)
         } else if let Some(i) = self
             .spec
             .measured_tip
@@ -154,26 +213,50 @@ impl ReadingsParser {
         }
     }
 
-    /// The first column named `tension_<x>` with no driven tendon `x`.
-    fn unknown_tension_column<'a>(
+    /// The first column named `tension_<x>` with no driven tendon `x`, or
+    /// `length_<x>` with no measuring cable `x`.
+    fn unknown_measurement_column<'a>(
         &self,
         mut names: impl Iterator<Item = &'a str>,
     ) -> Option<String> {
         names
-            .find(|n| n.starts_with("tension_") && self.classify(n) == Col::Ignored)
+            .find(|n| {
+                (n.starts_with("tension_") || n.starts_with("length_"))
+                    && self.classify(n) == Col::Ignored
+            })
             .map(str::to_string)
     }
 
-    fn unknown_tension(&self, line: usize, name: &str) -> LineError {
-        Self::err(
-            line,
-            name,
+    fn unknown_measurement(&self, line: usize, name: &str) -> LineError {
+        let why = if let Some(cable) = name.strip_prefix("tension_") {
             format!(
-                "no displacement-driven tendon named `{}` for a load cell (tendons: {}); the column is ignored",
-                name.trim_start_matches("tension_"),
+                "no displacement-driven tendon named `{cable}` for a load cell (tendons: {}); the column is ignored",
                 self.cables.join(", ")
-            ),
-        )
+            )
+        } else {
+            let cable = name.trim_start_matches("length_");
+            let passive: Vec<&str> = self
+                .measuring
+                .iter()
+                .flatten()
+                .map(String::as_str)
+                .collect();
+            let passive = if passive.is_empty() {
+                "none".to_string()
+            } else {
+                passive.join(", ")
+            };
+            if self.cables.iter().any(|c| c == cable) {
+                format!(
+                    "`{cable}` is a displacement-driven tendon, not a passive measuring cable: its reading is an input (passive cables: {passive}); the column is ignored"
+                )
+            } else {
+                format!(
+                    "no passive (measuring) cable named `{cable}` (passive cables: {passive}); the column is ignored"
+                )
+            }
+        };
+        Self::err(line, name, why)
     }
 
     /// Parse one line: `Ok(None)` for blank lines, comments and headers.
@@ -204,10 +287,10 @@ impl ReadingsParser {
                 ));
             }
             self.names = cells.iter().map(|c| c.to_string()).collect();
-            let unknown = self.unknown_tension_column(cells.iter().copied());
+            let unknown = self.unknown_measurement_column(cells.iter().copied());
             let restart = self.header.replace(cols).is_some();
             if let Some(name) = unknown {
-                return Err(self.unknown_tension(line_no, &name));
+                return Err(self.unknown_measurement(line_no, &name));
             }
             if restart {
                 // a header mid-stream (two recordings joined, a logger restarted):
@@ -244,8 +327,8 @@ impl ReadingsParser {
         let obj = v
             .as_object()
             .ok_or_else(|| Self::err(line, "json", "a row must be an object"))?;
-        if let Some(name) = self.unknown_tension_column(obj.keys().map(String::as_str)) {
-            return Err(self.unknown_tension(line, &name));
+        if let Some(name) = self.unknown_measurement_column(obj.keys().map(String::as_str)) {
+            return Err(self.unknown_measurement(line, &name));
         }
         let items: Vec<(Col, String, Option<String>)> = obj
             .iter()
@@ -273,6 +356,7 @@ impl ReadingsParser {
             t_s: None,
             readings_m: vec![f64::NAN; n],
             tensions_n: vec![f64::NAN; n],
+            length_changes_m: vec![f64::NAN; self.measuring.len()],
             measured_tip_m: None,
         };
         let mut tip = [f64::NAN; 3];
@@ -297,6 +381,7 @@ impl ReadingsParser {
                     }
                     row.tensions_n[i] = v
                 }
+                Col::Length(j) => row.length_changes_m[j] = v * self.spec.length_scale(),
                 Col::Tip(i) => tip[i] = v * self.spec.measured_scale_m,
                 Col::Ignored => {}
             }
@@ -408,5 +493,34 @@ mod tests {
         // empty load cell: no measurement on that row
         let r = p.line(5, "1,2,,0").unwrap().unwrap();
         assert!(r.tensions_n[0].is_nan());
+    }
+
+    #[test]
+    fn csv_measuring_cable_columns() {
+        let mut p = parser().with_measuring_cables(vec![None, None, Some("m".into())]);
+        // without `length_scale_m` the tendon unit applies
+        assert_eq!(p.line(1, "a_mm,b_mm,length_m").unwrap(), None);
+        let r = p.line(2, "1,2,-0.5").unwrap().unwrap();
+        assert_eq!(r.length_changes().map(<[f64]>::len), Some(3));
+        assert!(r.length_changes_m[..2].iter().all(|v| v.is_nan()));
+        assert_eq!(r.length_changes_m[2], -0.5e-3);
+        // empty: not measured (not the last value)
+        let r = p.line(3, "1,2,").unwrap().unwrap();
+        assert!(r.length_changes_m[2].is_nan());
+        let e = p.line(4, "a_mm,b_mm,length_a").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (4, "length_a"));
+        assert!(e.why.contains("displacement-driven"), "{e}");
+        // a parser that knows no cables: no length changes, `length_` is unknown
+        let mut q = ReadingsParser::new(
+            vec!["a".into()],
+            vec!["a".into()],
+            ReadingsSpec {
+                length_scale_m: Some(1e-6),
+                ..ReadingsSpec::default()
+            },
+        );
+        let e = q.line(1, "a,length_m").unwrap_err();
+        assert!(e.why.contains("passive cables: none"), "{e}");
+        assert_eq!(q.line(2, "1,5").unwrap().unwrap().length_changes(), None);
     }
 }

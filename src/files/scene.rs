@@ -159,7 +159,8 @@ impl Scene {
             self.numerics.clone(),
         )
     }
-    /// A parser for readings files of this scene's displacement-driven tendons.
+    /// A parser for readings files of this scene's displacement-driven tendons, with
+    /// a `length_<cable>` column for each passive (measuring) cable.
     pub fn readings_parser(
         &self,
         ws: &crate::tendons::TendonWorkspace,
@@ -172,6 +173,15 @@ impl Scene {
                 .map(|&j| robot.cables()[j].name.clone())
                 .collect(),
             self.readings.clone().unwrap_or_default(),
+        )
+        .with_measuring_cables(
+            robot
+                .cables()
+                .iter()
+                .map(|c| {
+                    (c.actuation == crate::tendons::Actuation::Passive).then(|| c.name.clone())
+                })
+                .collect(),
         )
     }
     /// Serialize to TOML.

@@ -16,7 +16,10 @@ pub struct Args {
     scene: PathBuf,
     /// Encoder samples: CSV with a header, or JSON lines (a path or `demo:NAME`); on a
     /// scene with displacement-driven tendons, rows of servo readings with
-    /// `tension_<tendon>` load-cell columns.
+    /// `tension_<tendon>` load-cell columns (N) and/or `length_<cable>` length changes
+    /// of passive measuring cables from the reference state (unit `[readings]
+    /// length_scale_m`, default `scale_m`); an empty or missing cell is not measured
+    /// in that row, and a row with neither is reported unobservable.
     #[arg(long, default_value = cablesense::files::demo::TRACK_INPUT)]
     measure: PathBuf,
     /// One JSON object per sample instead of a table.

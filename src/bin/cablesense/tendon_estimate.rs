@@ -1,6 +1,7 @@
 //! `estimate` and `track` on a scene with displacement-driven tendons and an
-//! `[estimate]` table: unknown loads from load cells, one row of servo readings (and
-//! `tension_<cable>` columns) per line (`estimate::TendonLoadEstimator`). A bad row
+//! `[estimate]` table: unknown loads from load cells and measuring cables, one row of
+//! servo readings (and `tension_<cable>` load-cell columns, `length_<cable>` length
+//! changes of passive cables) per line (`estimate::TendonLoadEstimator`). A bad row
 //! is reported and the stream goes on.
 
 use anyhow::Context;
@@ -55,6 +56,9 @@ fn row_json(row: &ReadingRow, e: &TendonEstimate, fallback: bool) -> Value {
         "measured_tension_n": e.measured_tension_n,
         "tension_residual_n": e.tension_residual_n,
         "slack_no_residual": e.slack_no_residual,
+        // per robot cable: measured only for passive cables with a `length_` cell
+        "measured_length_change_m": est.measured_m,
+        "length_change_residual_m": est.residual_m,
         "iterations": est.iterations,
         "jacobian_evals": est.jacobian_evals,
         "elapsed_s": est.elapsed_s,
@@ -121,7 +125,7 @@ pub fn stream(
     if output == Output::Text {
         writeln!(
             out,
-            "scene: {}   unknowns from load cells (tension_<tendon> columns)",
+            "scene: {}   unknowns from load cells and measuring cables (tension_<tendon>, length_<passive cable> columns)",
             scene_path.display()
         )?;
         writeln!(
@@ -156,7 +160,7 @@ pub fn stream(
             }
         };
         start.copy_from_slice(est.estimator().theta());
-        if let Err(e) = est.tick(&row.readings_m, &row.tensions_n, None) {
+        if let Err(e) = est.tick(&row.readings_m, &row.tensions_n, row.length_changes()) {
             bad += 1;
             emit_error(&mut out, output, row.line, "row", &e.to_string())?;
             continue;

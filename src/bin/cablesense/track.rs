@@ -13,8 +13,10 @@ use std::process::ExitCode;
 pub struct Args {
     /// Scene with an [estimate] table, or a scene with displacement-driven tendons
     /// and no [estimate] table (rows of servo readings -> shape per row, warm-started
-    /// from the previous row), or one with both (servo readings and `tension_<tendon>`
-    /// load cells -> unknown loads, tensions and shape per row). Default: the shipped demo, which also defaults the
+    /// from the previous row), or one with both (servo readings with `tension_<tendon>`
+    /// load cells and/or `length_<cable>` length changes of passive measuring cables,
+    /// unit `[readings] length_scale_m`, default `scale_m` -> unknown loads, tensions
+    /// and shape per row; an empty cell is not measured in that row). Default: the shipped demo, which also defaults the
     /// input to its recorded stream.
     scene: Option<PathBuf>,
     /// Read rows from this file (or `demo:NAME`) instead of standard input.
