@@ -14,7 +14,7 @@
 
 mod common;
 
-use cablesense::ladder::TendonKinematics;
+use cablesense::ladder::{CcSettings, PccSettings, Rung, TendonKinematics};
 use cablesense::nalgebra::Vector3;
 use cablesense::tendons::{TendonReport, TendonSettings, TendonWorkspace};
 use cablesense::{Loads, Robot, Scene, Start, Workspace};
@@ -195,8 +195,10 @@ fn slack_continuous_tendon_carries_nothing() {
 /// continuous tendon pulled by `q` bends the section into an arc of `theta = q / r`
 /// (its path is the parallel curve at `r`), the constant-curvature kinematics
 /// (`TendonKinematics`) say the same, and they equal those of disk holes at the same
-/// radius and angle (1e-15 rad: the same closed form). Tip tolerance 1e-9 m: RK4 at
-/// 32 steps on an arc of 0.6 rad (the error of the rotation's integration).
+/// radius and angle (1e-15 rad: the same closed form). Tip tolerance 1e-9 m for the
+/// rod: RK4 at 32 steps on an arc of 0.6 rad (the error of the rotation's
+/// integration); 1e-12 m for the CC and PCC rungs driven by the reading (closed-form
+/// arcs).
 #[test]
 fn straight_continuous_tendon_matches_constant_curvature_kinematics() {
     let kirchhoff = "rod_model = \"kirchhoff\"\nintegrator = { rk4 = { steps_per_section = 32 } }\ntolerance = 1e-12\n";
@@ -225,6 +227,31 @@ fn straight_continuous_tendon_matches_constant_curvature_kinematics() {
         (th - theta).abs() < 1e-15 && (phi - a).abs() < 1e-15,
         "{th} {phi}"
     );
+    // the CC and PCC rungs driven by the reading: the same arc, and the path length
+    // L (1 - kappa r) = L - q (1e-12 m: closed forms, no integration)
+    for rung in [
+        Rung::ConstantCurvature(CcSettings::default()),
+        Rung::PiecewiseConstantCurvature(PccSettings::default()),
+    ] {
+        let mut m = rung.build_readings(&robot, &sc.loads).unwrap();
+        m.solve_readings(&[q], Start::Warm).unwrap();
+        let d = (m.tip_position() - want).norm();
+        let mut l = [0.0];
+        m.cable_lengths_into(&mut l);
+        eprintln!("{}: tip error {d:e} m, length {}", rung.label(), l[0]);
+        assert!(
+            d < 1e-12,
+            "{}: tip {} vs {want}",
+            rung.label(),
+            m.tip_position()
+        );
+        assert!(
+            (l[0] - (len - q)).abs() < 1e-12,
+            "{}: length {}",
+            rung.label(),
+            l[0]
+        );
+    }
     let disks = scene_with(
         r#"
 [[robot.cables]]
@@ -606,5 +633,79 @@ axis = "y"
                 e.estimate.values[k]
             );
         }
+    }
+}
+
+const READINGS_SCENE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/data/scenes/till_tendon_readings.toml"
+);
+const READINGS_CSV: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/data/measurements/till_tendon_readings.csv"
+);
+
+/// The shipped example through the binary: `cablesense solve
+/// data/scenes/till_tendon_readings.toml --readings data/measurements/till_tendon_readings.csv
+/// --json` exits 0, every row converges, and its tensions and tips equal the
+/// library's warm chain of the same rows (1e-9 N, 1e-9 m: the same solves, printed
+/// with full precision by serde_json); each taut tendon obeys its law (1e-10 strain).
+#[test]
+fn cli_solves_the_shipped_continuous_readings_example() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablesense"))
+        .args([
+            "solve",
+            READINGS_SCENE,
+            "--readings",
+            READINGS_CSV,
+            "--json",
+        ])
+        .output()
+        .expect("binary runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "exit {:?}: {}\n{stdout}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    let csv = std::fs::read_to_string(READINGS_CSV).unwrap();
+    let q: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').skip(1).map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), q.len());
+    let sc = Scene::load(READINGS_SCENE).unwrap();
+    let mut ws = sc.tendon_workspace().unwrap();
+    let l0 = ws.rest_free_lengths().to_vec();
+    for (row, q) in rows.iter().zip(&q) {
+        assert_eq!(row["status"], "converged", "{row}");
+        solve(&mut ws, q);
+        let t: Vec<f64> = serde_json::from_value(row["tensions_n"].clone()).unwrap();
+        let tip: Vec<f64> = serde_json::from_value(row["tip_position_m"].clone()).unwrap();
+        for i in 0..4 {
+            Tol::abs(1e-9).check("CLI tension", i, 0.0, t[i], ws.tensions()[i]);
+            Tol::abs(1e-9).check(
+                "CLI tip",
+                i.min(2),
+                0.0,
+                tip[i.min(2)],
+                ws.tip_position()[i.min(2)],
+            );
+            if ws.taut()[i] {
+                let free = l0[i] - q[i];
+                let gap = ws.tensions()[i] / 2.0e4 - (ws.lengths()[i] - free) / free;
+                assert!(
+                    gap.abs() <= 1e-10,
+                    "row {q:?} tendon {i}: strain gap {gap:e}"
+                );
+            }
+        }
+        eprintln!("CLI row {q:?}: T {t:?}, taut {}", row["taut"]);
     }
 }
