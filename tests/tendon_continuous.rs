@@ -428,10 +428,65 @@ fn mixed_disk_and_continuous_tendons_converge_and_obey_their_law() {
 /// shooting tolerance through the quotient).
 #[test]
 fn continuous_tendon_derivatives_match_central_differences() {
+    let worst = check_derivatives(mixed(), &MIXED_ROWS[2], &[2, 3]);
+    eprintln!("mixed: largest |exact - fd| of a continuous tendon's dl/dz: {worst:e}");
+}
+
+/// As above on Till's rod with a helical and a tabulated driven tendon (the path's
+/// `r'`, `r''` terms of RW 2011 eqs. 14-16 and a table starting on the axis, whose
+/// slack-branch scale comes from its largest offset).
+#[test]
+fn helical_and_tabulated_tendon_derivatives_match_central_differences() {
+    let sc = till(
+        r#"
+[[robot.cables]]
+name = "h"
+routing = "continuous"
+path = { helical = { radius_m = 0.01, start_angle_deg = 0.0, pitch_m_per_turn = 0.8 } }
+end_section = 0
+actuation = "displacement"
+tendon = { stiffness_n = 2000, pretension_n = 0.5 }
+
+[[robot.cables]]
+name = "tab"
+routing = "continuous"
+path = { table = { points_m = [[0.0, 0.0, 0.0], [0.2, -0.004, 0.008], [0.5, -0.012, 0.002]] } }
+end_section = 0
+actuation = "displacement"
+tendon = { stiffness_n = 2000, pretension_n = 0.5 }
+"#,
+        "",
+    );
+    let worst = check_derivatives(sc.clone(), &[2e-3, 1e-3], &[0, 1]);
+    eprintln!("helical/table: largest |exact - fd| of dl/dz: {worst:e}");
+    // and the law at a few rows
+    let mut ws = sc.tendon_workspace().unwrap();
+    let l0 = ws.rest_free_lengths().to_vec();
+    for q in [[1e-3, 0.0], [3e-3, 2e-3], [-1e-3, 4e-3]] {
+        solve(&mut ws, &q);
+        for i in 0..2 {
+            let (t, l, free) = (ws.tensions()[i], ws.lengths()[i], l0[i] - q[i]);
+            if ws.taut()[i] {
+                let gap = t / 2000.0 - (l - free) / free;
+                assert!(gap.abs() <= 1e-10, "q {q:?} tendon {i}: strain gap {gap:e}");
+            } else {
+                assert!(t == 0.0 && l <= free + 1e-12, "q {q:?} slack {i}: {t} {l}");
+            }
+        }
+        eprintln!(
+            "helical/table q {q:?}: T {:?} taut {:?}",
+            ws.tensions(),
+            ws.taut()
+        );
+    }
+}
+
+/// The derivative checks of the two tests above at the readings `q` of `sc`; returns
+/// the largest `|exact - fd|` of the `dl/dz` rows of cables `cont` (asserted nonzero).
+fn check_derivatives(sc: Scene, q: &[f64], cont: &[usize]) -> f64 {
     const H: f64 = 1e-4;
-    let sc = mixed();
     let mut tw = sc.tendon_workspace().unwrap();
-    solve(&mut tw, &MIXED_ROWS[2]);
+    solve(&mut tw, q);
     let theta = tw.tensions().to_vec();
     let ws = tw.workspace_mut();
     let n = ws.unknowns();
@@ -472,14 +527,15 @@ fn continuous_tendon_derivatives_match_central_differences() {
         for j in 0..c {
             let fd = (lp[j] - lm[j]) / (2.0 * H);
             tol_l.check("dl/dz", j * w + col, 0.0, jm[j * w + col], fd);
-            if j >= 2 {
+            if cont.contains(&j) {
                 worst = worst.max((jm[j * w + col] - fd).abs());
             }
         }
     }
     // the continuous tendons' rows are not trivially zero
-    assert!((2..4).all(|j| (0..w).any(|col| jm[j * w + col].abs() > 1e-6)));
-    eprintln!("largest |exact - fd| of a continuous tendon's dl/dz: {worst:e}");
+    assert!(cont
+        .iter()
+        .all(|&j| (0..w).any(|col| jm[j * w + col].abs() > 1e-6)));
     // total dl/dT at the equilibrium against re-solves
     ws.set_theta(&theta);
     assert!(ws.solve(Start::Warm).status.is_converged());
@@ -499,6 +555,7 @@ fn continuous_tendon_derivatives_match_central_differences() {
             tol.check("dl/dT", j * p + k, 0.0, sens[j * p + k], fd);
         }
     }
+    worst
 }
 
 /// Large pulls: the readings solve never switches to multiple shooting (its tensions
@@ -530,7 +587,8 @@ fn large_pull_stays_on_single_shooting_and_converges() {
 }
 
 /// Refusals name the field: capstan friction on a continuous driven tendon (a
-/// per-disk model), and the constant-curvature kinematics of a helical driven tendon.
+/// per-disk model), `calibrate identify` (hole angles), and the constant-curvature
+/// kinematics of a helical driven tendon.
 #[test]
 fn refusals_name_the_field() {
     let sc = till(
@@ -544,6 +602,14 @@ fn refusals_name_the_field() {
         "{e}"
     );
     assert!(sc.tendon_workspace().is_err());
+    // identify maps servos onto disk holes' angles: a continuous tendon is refused
+    let e = cablesense::calibrate::scene_segments(&till(
+        &cont("t0", 0.0, 0, "displacement", "2000", 0.0),
+        "",
+    ))
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("cable 0 is continuously routed"), "{e}");
     // mu = 0 is no friction: accepted
     let ok = till(
         &cont("t0", 0.0, 0, "displacement", "2000", 0.0),
