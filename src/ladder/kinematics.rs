@@ -13,7 +13,9 @@
 //! Delta l = -r theta cos(phi - sigma) = -d . w,   w = theta (cos phi, sin phi),  d = r (cos sigma, sin sigma)
 //! ```
 //!
-//! linear in the bending vector `w`. A tendon pulled in by `q` (reading, m, positive =
+//! linear in the bending vector `w` (a continuous tendon on a straight path at offset
+//! `d` obeys the same law on every section it spans; a helical or tabulated one is
+//! refused, naming its `path`). A tendon pulled in by `q` (reading, m, positive =
 //! pulled, zero offset removed as in [`crate::tendons::TendonWorkspace`]) and ending on
 //! section `e` shortens its path by `q`, so `sum_{k <= e} d_k . w_k = q` (code `d`, `w`,
 //! `q`; paper `r_i`, `sigma_i`, `phi`, `theta`, `Delta l_i`). Ignored: tendon stretch,
