@@ -717,12 +717,16 @@ fn curvature_rungs_take_straight_continuous_tendons() {
     assert!(e.to_string().contains("helical"), "{e}");
 }
 
-/// Till's robot with its continuous tendons driven by displacement is refused with
-/// an error naming the cable's `actuation` (the readings solve measures tendon paths
-/// through disk holes; continuous lengths are not wired into it yet), not the
-/// misleading "no free length" of a zero hole-path length it gave before.
+/// Till's robot with its continuous tendons driven by displacement (refused before
+/// the readings solve took continuous lengths; it once gave a misleading "no free
+/// length" from a zero hole-path length): it builds, each free length `L0` comes from
+/// the integrated path at the pretension (about the rod's 0.5 m, its tendons sagging
+/// with the rod under gravity), zero readings give back the pretensions (1e-9 N: the
+/// reference is the solution), and a pull obeys `T = EA_t (l - L_f)/L_f` as strain to
+/// 1e-10 (the solve's 1e-12 m length tolerance over `L_f` ~ 0.5 m). More in
+/// `tests/tendon_continuous.rs`.
 #[test]
-fn displacement_driven_continuous_tendons_are_refused_by_name() {
+fn displacement_driven_continuous_tendons_solve_from_readings() {
     let text = std::fs::read_to_string(TILL)
         .unwrap()
         .replace(
@@ -735,11 +739,27 @@ fn displacement_driven_continuous_tendons_are_refused_by_name() {
         )
         .replace("tensions_n = [15.0, 0.0, 0.0, 0.0]\n", "");
     let sc = Scene::from_toml_str(&text).unwrap();
-    let e = sc.build_robot().unwrap_err().to_string();
-    assert!(
-        e.contains("robot.cables[0].actuation") && e.contains("continuously routed"),
-        "{e}"
-    );
+    let mut ws = sc.tendon_workspace().unwrap();
+    for l0 in ws.rest_free_lengths() {
+        assert!((l0 - 0.5).abs() < 1e-2, "L0 = {l0}");
+    }
+    let rep = ws.solve_readings(&[0.0; 4]).unwrap();
+    assert!(rep.status.is_converged(), "{rep:?}");
+    for t in ws.tensions() {
+        assert!((t - 2.0).abs() < 1e-9, "zero readings: T = {t}");
+    }
+    let q = [2e-3, 0.0, 0.0, 0.0];
+    let rep = ws.solve_readings(&q).unwrap();
+    assert!(rep.status.is_converged(), "{rep:?}");
+    assert!(ws.tensions()[0] > 2.0);
+    let l0 = ws.rest_free_lengths().to_vec();
+    for i in 0..4 {
+        let (t, l, free) = (ws.tensions()[i], ws.lengths()[i], l0[i] - q[i]);
+        if ws.taut()[i] {
+            let gap = t / 2.0e4 - (l - free) / free;
+            assert!(gap.abs() < 1e-10, "tendon {i}: strain gap {gap:e}");
+        }
+    }
 }
 
 /// Warm solves along a tension ramp on the disk model (40 disks, the condensed

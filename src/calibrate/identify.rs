@@ -498,6 +498,16 @@ pub fn scene_segments(scene: &Scene) -> Result<Vec<SceneSegment>, IdentifyError>
         if c.actuation != Actuation::Displacement {
             continue;
         }
+        if c.continuous {
+            // (a straight path has an angle, but the proposed snippet edits `routing`
+            // tables only, and no recording of such a robot has checked the rest)
+            return Err(IdentifyError::Mismatch {
+                file: "scene".into(),
+                why: format!(
+                    "cable {j} is continuously routed (`routing = \"continuous\"`): identify maps servos onto disk-routed tendons' hole angles only"
+                ),
+            });
+        }
         let angle = c
             .routing
             .as_ref()

@@ -63,6 +63,14 @@ pub const FILES: &[DemoFile] = &[
         "John Till's example tendon robot: four straight continuous tendons (Rucker & Webster 2011 routing)"
     ),
     demo!(
+        "scenes/till_tendon_readings.toml",
+        "Till's robot with its continuous tendons displacement-driven (`solve --readings`)"
+    ),
+    demo!(
+        "measurements/till_tendon_readings.csv",
+        "servo readings for Till's displacement-driven robot (`solve demo:scenes/till_tendon_readings.toml --readings ..`)"
+    ),
+    demo!(
         "scenes/tdcr_two_segment.toml",
         "textbook two-segment tendon-driven robot (displacement-driven tendons)"
     ),

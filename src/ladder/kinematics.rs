@@ -13,7 +13,9 @@
 //! Delta l = -r theta cos(phi - sigma) = -d . w,   w = theta (cos phi, sin phi),  d = r (cos sigma, sin sigma)
 //! ```
 //!
-//! linear in the bending vector `w`. A tendon pulled in by `q` (reading, m, positive =
+//! linear in the bending vector `w` (a continuous tendon on a straight path at offset
+//! `d` obeys the same law on every section it spans; a helical or tabulated one is
+//! refused, naming its `path`). A tendon pulled in by `q` (reading, m, positive =
 //! pulled, zero offset removed as in [`crate::tendons::TendonWorkspace`]) and ending on
 //! section `e` shortens its path by `q`, so `sum_{k <= e} d_k . w_k = q` (code `d`, `w`,
 //! `q`; paper `r_i`, `sigma_i`, `phi`, `theta`, `Delta l_i`). Ignored: tendon stretch,
@@ -47,7 +49,7 @@
 
 use super::LadderError;
 use crate::error::ModelError;
-use crate::robot::Robot;
+use crate::robot::{Robot, TendonPath};
 use crate::tendons::Actuation;
 use nalgebra::{Vector2, Vector3};
 
@@ -94,8 +96,26 @@ impl TendonKinematics {
             if c.actuation != Actuation::Displacement {
                 continue;
             }
+            // a continuous tendon on a straight path at offset `d` changes its length
+            // by `-d . w` over an arc, like holes at `d` on every disk (the path is the
+            // parallel curve at `d`: `|e3 + u x d| = 1 - kappa d . (cos phi, sin phi)`,
+            // Kirchhoff, `super::straight_arc_length`); a helical or tabulated path
+            // turns in the cross-section, so no single `d` per section exists
+            let straight = match &c.path {
+                None => None,
+                Some(TendonPath::Straight(d)) => Some(Vector2::new(d.x, d.y)),
+                Some(_) => {
+                    return Err(LadderError::Model(ModelError::Invalid {
+                        field: format!("robot.cables[{j}].path"),
+                        why: "a displacement-driven tendon on a helical or tabulated continuous path does not keep a section's curvature constant: the constant-curvature kinematics take straight paths only (drive it through the rod rungs' readings solve)".into(),
+                    }))
+                }
+            };
             let holes = (0..=c.end_section)
                 .map(|k| {
+                    if let Some(d) = straight {
+                        return d;
+                    }
                     // the hole on this section's first disk; a section without disks
                     // uses the nearest disk before it, else the base plate (as the CC
                     // rung's moment arms)

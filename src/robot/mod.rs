@@ -201,13 +201,19 @@ impl Robot {
         c: &spec::CableSpec,
         j: usize,
     ) -> Result<Cable, ModelError> {
-        if c.actuation == crate::tendons::Actuation::Displacement {
-            // The readings solve (src/tendons) measures each driven tendon's path and
-            // its derivatives through the disk holes; a continuous path's length is an
-            // integral of the shooting pass instead, not wired into that solve yet.
+        // A displacement-driven continuous tendon is solved like a disk-routed one
+        // (`crate::tendons`: its length is the pass's integral `int |p_i'| ds`, RW
+        // 2011 section III, and its derivatives come from the dual sweep), except for
+        // capstan friction: `tendons::friction` is a per-hole wrap angle, and a tendon
+        // sliding along a continuous sheath has friction distributed along its path
+        // (tension varying with `s`, which the RW 2011 equations here do not model).
+        let mu = spec.friction.as_ref().map_or(0.0, |f| f.mu);
+        if c.actuation == crate::tendons::Actuation::Displacement && mu > 0.0 {
             return Err(ModelError::Invalid {
-                field: format!("robot.cables[{j}].actuation"),
-                why: "displacement actuation of a continuously routed tendon is not supported yet: drive it by tension (its length change is still computed) or route it through disks".into(),
+                field: "robot.friction".into(),
+                why: format!(
+                    "robot.cables[{j}] is continuously routed and displacement-driven: capstan friction (mu = {mu}) is a per-disk wrap-angle model and does not apply to a continuous path (friction along it is not modelled); remove [robot.friction] or set mu = 0"
+                ),
             });
         }
         let field = format!("robot.cables[{j}].path");

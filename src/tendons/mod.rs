@@ -4,8 +4,9 @@
 //! A displacement-driven tendon is pulled by a position-controlled actuator whose
 //! encoder reads `q` (m, positive = pulled). The reading sets the tendon's free
 //! (unstretched) length `L_f = L0 - q` between the actuator and the termination disk.
-//! With the path `l(shape)` through the holes (thesis 3.8.1), an axial stiffness
-//! `EA_t` and a series spring `k_s` at the actuator, a taut tendon carries
+//! With the path `l(shape)` through the holes (thesis 3.8.1) or along a continuous
+//! path (below), an axial stiffness `EA_t` and a series spring `k_s` at the actuator,
+//! a taut tendon carries
 //!
 //! ```text
 //! l = L_f (1 + T/EA_t) + T/k_s          <=>  T = (l - L_f) / (L_f/EA_t + 1/k_s)
@@ -23,6 +24,16 @@
 //! The pretension `T0` at `q = 0` fixes `L0`: the robot is solved with every
 //! displacement-driven tendon at `T0` under the scene's loads, and `L0 = (l_ref -
 //! T0/k_s) / (1 + T0/EA_t)`.
+//!
+//! **Continuous routing.** A displacement-driven tendon may also run on a continuous
+//! path (`routing = "continuous"`, [`crate::robot::TendonPath`]): then `l` is the
+//! path's length `int_0^{s_e} |p_i'| ds`, integrated along the shooting pass (RW 2011
+//! section III, `statics::continuous`), with its exact derivatives from the same dual
+//! sweep, and everything above holds unchanged (`L0` from the reference at `T0`,
+//! stretch, series spring, slack). Refused: capstan friction (`robot.friction` with
+//! `mu > 0`: a per-disk wrap-angle model, [`capstan_factors`]) on such a tendon.
+//! Multiple shooting never runs for a readings solve (its tensions are load
+//! parameters, which `statics::multiple` does not take), continuous tendon or not.
 //!
 //! Rucker & Webster 2011 ("Statics and dynamics of continuum robots with general
 //! tendon routing and external loading", IEEE T-RO 27(6)) treat tendons as

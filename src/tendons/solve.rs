@@ -172,8 +172,14 @@ impl TendonWorkspace {
                     driven.push(j);
                     mech.push(m);
                     columns.push(c.reading.clone());
+                    // the moment arm: the base hole, or a continuous path's largest
+                    // offset (a table's may start on the axis)
                     let s_end = c.end_s;
-                    geo.push((c.base_hole.norm().powi(2) * s_end / ei).max(1e-12));
+                    let arm = c
+                        .path
+                        .as_ref()
+                        .map_or(c.base_hole.norm(), |p| p.max_radius(s_end));
+                    geo.push((arm.powi(2) * s_end / ei).max(1e-12));
                 }
                 Actuation::Passive => {
                     if loads.tension(j) != 0.0 {
@@ -267,8 +273,11 @@ impl TendonWorkspace {
                 ),
             });
         }
+        // every cable's path: the chords through its holes (thesis 3.8.1) or a
+        // continuous tendon's integral along the pass (`statics::continuous`)
+        self.ws.cable_lengths_into(&mut self.lengths);
         for (i, &j) in self.driven.iter().enumerate() {
-            let l = crate::cables::path_length(&self.ws.base_hole_world(j), self.ws.cable_holes(j));
+            let l = self.lengths[j];
             self.free0[i] = self.mech[i].free_length_at_rest(l);
             if self.free0[i].is_nan() || self.free0[i] <= 0.0 {
                 return Err(ModelError::OutOfRange {

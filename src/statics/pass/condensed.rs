@@ -280,7 +280,8 @@ pub(super) fn seed_jump<T: Real>(y: &mut State<T>) {
 /// Dual pass at the disk after `g`: with `a = dp/dz` (outer directions) and
 /// `C = dp/dj` (the jump's local directions) read off the computed holes and `B` from
 /// guide `g`, fold `dj/dz = (I - B C)^-1 B a` into the outer directions, so the state
-/// carries exact outer derivatives only. Also stores `M = I + C (I - B C)^-1 B` for
+/// carries exact outer derivatives only (the continuous tendons' integrated lengths
+/// included). Also stores `M = I + C (I - B C)^-1 B` for
 /// `f64` passes.
 pub(super) fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut State<T>, g: usize) {
     let pend = &plan.pending[g];
@@ -348,4 +349,7 @@ pub(super) fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut S
     y.rot.iter_mut().for_each(fold);
     y.n.iter_mut().for_each(fold);
     y.m.iter_mut().for_each(fold);
+    // the continuous tendons' lengths integrated over the segment are states too
+    // (`statics::continuous`: `int |q_i| ds` depends on the jump through the strains)
+    buf.lengths.iter_mut().for_each(fold);
 }
