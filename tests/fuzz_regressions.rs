@@ -19,6 +19,8 @@ mod shared_readings;
 mod shared_recording;
 #[path = "../fuzz/fuzz_targets/shared_stream.rs"]
 mod shared_stream;
+#[path = "../fuzz/fuzz_targets/shared_tdcr.rs"]
+mod shared_tdcr;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

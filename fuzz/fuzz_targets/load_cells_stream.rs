@@ -5,6 +5,7 @@
 use libfuzzer_sys::fuzz_target;
 
 mod shared_load_cells;
+mod shared_tdcr;
 
 fuzz_target!(|data: &[u8]| {
     shared_load_cells::check_load_cells(data);

@@ -5,6 +5,7 @@
 use libfuzzer_sys::fuzz_target;
 
 mod shared_readings;
+mod shared_tdcr;
 
 fuzz_target!(|data: &[u8]| {
     shared_readings::check_readings(data);

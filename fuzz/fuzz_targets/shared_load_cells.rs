@@ -9,8 +9,8 @@
 //! [`Robot`], [`robot_for`]).
 //!
 //! Budget of one input (both robots): at most [`MAX_ROWS`] rows ticked, forward
-//! solves capped at [`MAX_ITERATIONS`] Newton iterations and
-//! [`MAX_CONTINUATION_STEPS`] continuation steps (`shared.rs` caps the `scene_*`
+//! solves capped at `shared_tdcr::MAX_ITERATIONS` Newton iterations and
+//! `shared_tdcr::MAX_CONTINUATION_STEPS` continuation steps (`shared.rs` caps the `scene_*`
 //! targets' solves at 6 and 4), at most [`MAX_ESTIMATE_ITERATIONS`] estimator
 //! iterations per row (the tendon iterations inside each forward solve stay at the
 //! library's default: the estimator does not expose its tendon settings). A row that runs out of this budget ends with a non-converged status, which
@@ -34,9 +34,9 @@ use cablesense::files::load_cells;
 use cablesense::Scene;
 use std::sync::OnceLock;
 
-#[path = "shared_tdcr.rs"]
-mod shared_tdcr;
-pub use shared_tdcr::{robot_for, Robot, MAX_CONTINUATION_STEPS, MAX_ITERATIONS};
+// the crate root (the fuzz target, or tests/fuzz_regressions.rs) includes it once
+use super::shared_tdcr;
+pub use shared_tdcr::{robot_for, Robot};
 
 const SCENE: &str = include_str!("../../data/load_cells/tdcr_load_cells.toml");
 

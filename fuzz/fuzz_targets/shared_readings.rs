@@ -7,8 +7,8 @@
 //! the scene itself and a small copy of it (`shared_tdcr.rs`, [`Robot`], [`robot_for`]).
 //!
 //! Budget of one input (both robots): at most [`MAX_ROWS`] solved rows, forward
-//! solves capped at [`MAX_ITERATIONS`] Newton iterations and
-//! [`MAX_CONTINUATION_STEPS`] continuation steps (`shared.rs` caps the `scene_*`
+//! solves capped at `shared_tdcr::MAX_ITERATIONS` Newton iterations and
+//! `shared_tdcr::MAX_CONTINUATION_STEPS` continuation steps (`shared.rs` caps the `scene_*`
 //! targets' solves at 6 and 4), at most [`MAX_TENDON_ITERATIONS`] Newton iterations on the
 //! tensions. A row that runs out of this budget ends with a non-converged status,
 //! which the checks accept as a clean failure (the state must still be usable by the
@@ -29,9 +29,9 @@ use cablesense::tendons::{TendonSettings, TendonWorkspace};
 use cablesense::Scene;
 use std::sync::OnceLock;
 
-#[path = "shared_tdcr.rs"]
-mod shared_tdcr;
-pub use shared_tdcr::{robot_for, Robot, MAX_CONTINUATION_STEPS, MAX_ITERATIONS};
+// the crate root (the fuzz target, or tests/fuzz_regressions.rs) includes it once
+use super::shared_tdcr;
+pub use shared_tdcr::{robot_for, Robot};
 
 const SCENE: &str = include_str!("../../data/scenes/tdcr_two_segment.toml");
 
