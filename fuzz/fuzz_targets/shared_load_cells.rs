@@ -1,8 +1,9 @@
 //! Check of the `load_cells_stream` fuzz target, shared with
 //! `tests/fuzz_regressions.rs`: arbitrary bytes as a readings file with load-cell
-//! columns (`tension_<cable>`) of a two-segment TDCR with six displacement-driven
-//! tendons and an unknown tip load (force x, y and payload mass), every parsed row
-//! through the load estimator.
+//! columns (`tension_<cable>`) and a measuring cable's length change (`length_m1`,
+//! a passive cable added to the shipped scene) of a two-segment TDCR with six
+//! displacement-driven tendons and an unknown tip load (force x, y and payload mass),
+//! every parsed row through the load estimator.
 //!
 //! Two robots with the same columns: the shipped load-cell demo
 //! (`data/load_cells/tdcr_load_cells.toml`) and a small copy of it (`shared_tdcr.rs`,
@@ -21,7 +22,7 @@
 //! starts from the state `load_cells::estimator` returns, without re-building it.
 //!
 //! Invariants: no panic; a parsed row's load-cell tensions are missing (NaN) or
-//! finite and >= 0; a tick either returns a named error or a status, and the
+//! finite and >= 0, its length changes missing (NaN) or finite; a tick either returns a named error or a status, and the
 //! estimate then has values within the unknowns' bounds (finite), standard
 //! deviations >= 0 (infinite allowed: unobservable), finite tensions >= 0, and a
 //! tension residual only where the row has a load cell.
@@ -39,15 +40,19 @@ use super::shared_tdcr;
 pub use shared_tdcr::{robot_for, Robot};
 
 const SCENE: &str = include_str!("../../data/load_cells/tdcr_load_cells.toml");
+/// A passive measuring cable added to the shipped scene (its own hole, to the tip), so
+/// that `length_m1` columns are measurements of the estimator (`files::readings`).
+const MEASURING_CABLE: &str = "\n[[robot.cables]]\nname = \"m1\"\nrouting = { radius_m = 0.006, angle_deg = 30.0 }\nend_section = 1\nactuation = \"passive\"\n";
 
 /// Estimator iterations per row (the scene's default is 20).
 pub const MAX_ESTIMATE_ITERATIONS: usize = 8;
 /// Rows ticked per input (every row is parsed and checked).
 pub const MAX_ROWS: usize = 3;
 
-/// The shipped scene for `robot` (`shared_tdcr::scene`), estimator iterations capped.
+/// The shipped scene with the measuring cable for `robot` (`shared_tdcr::scene`),
+/// estimator iterations capped.
 pub fn scene(robot: Robot) -> Scene {
-    let mut scene = shared_tdcr::scene(SCENE, robot);
+    let mut scene = shared_tdcr::scene(&format!("{SCENE}{MEASURING_CABLE}"), robot);
     let e = scene.estimate.as_mut().expect("shipped scene estimates");
     e.max_iterations = e.max_iterations.min(MAX_ESTIMATE_ITERATIONS);
     scene
@@ -92,11 +97,22 @@ pub fn check_load_cells_on(robot: Robot, data: &[u8]) {
             row.line,
             row.tensions_n
         );
+        assert!(
+            row.length_changes_m
+                .iter()
+                .all(|l| l.is_nan() || l.is_finite()),
+            "line {}: a bad length change passed the parser: {:?}",
+            row.line,
+            row.length_changes_m
+        );
         if ticked >= MAX_ROWS {
             continue;
         }
         ticked += 1;
-        if est.tick(&row.readings_m, &row.tensions_n, None).is_err() {
+        if est
+            .tick(&row.readings_m, &row.tensions_n, row.length_changes())
+            .is_err()
+        {
             continue;
         }
         let e = est.estimate();
