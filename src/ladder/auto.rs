@@ -393,13 +393,7 @@ pub fn choose(
     settings: &AutoSettings,
     candidates: &[Rung],
 ) -> Result<AutoChoice, LadderError> {
-    settings.validate()?;
-    loads.validate(robot)?;
-    if candidates.is_empty() {
-        return Err(LadderError::NoCandidate(
-            "the candidate list is empty".into(),
-        ));
-    }
+    check_inputs(robot, loads, settings, candidates)?;
     let mut probes: Vec<(f64, Loads)> = Vec::new();
     for &f in &settings.probe_factors {
         let l = scale_loads(loads, f);
@@ -447,6 +441,23 @@ pub fn choose(
         (ref_tip, ref_cable),
         reference_time_s,
     ))
+}
+
+/// Settings and loads valid, and at least one candidate.
+pub(super) fn check_inputs(
+    robot: &Robot,
+    loads: &Loads,
+    settings: &AutoSettings,
+    candidates: &[Rung],
+) -> Result<(), LadderError> {
+    settings.validate()?;
+    loads.validate(robot)?;
+    if candidates.is_empty() {
+        return Err(LadderError::NoCandidate(
+            "the candidate list is empty".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// The reference at a looser tolerance and the factor by which its distance from the

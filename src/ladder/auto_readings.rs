@@ -25,7 +25,7 @@
 //! `probe_factor` hold the *positions of the rows* in the slice given (0-based), not
 //! load factors. [`AutoSettings::probe_factors`] is not used.
 
-use super::auto::{distance, finish, loose_reference, median, report, Probe};
+use super::auto::{check_inputs, distance, finish, loose_reference, median, report, Probe};
 use super::{AutoChoice, AutoSettings, LadderError, ReadingsModel, Rung};
 use crate::error::ModelError;
 use crate::loads::Loads;
@@ -62,13 +62,7 @@ pub fn choose_readings(
     settings: &AutoSettings,
     candidates: &[Rung],
 ) -> Result<AutoChoice, LadderError> {
-    settings.validate()?;
-    loads.validate(robot)?;
-    if candidates.is_empty() {
-        return Err(LadderError::NoCandidate(
-            "the candidate list is empty".into(),
-        ));
-    }
+    check_inputs(robot, loads, settings, candidates)?;
     check_rows(robot, rows)?;
     let nc = robot.cables().len();
     let mut reference = settings.reference.build_readings(robot, loads)?;

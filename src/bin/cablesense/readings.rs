@@ -120,22 +120,8 @@ pub fn stream(
     }
     let (mut solved, mut converged, mut bad) = (0, 0, 0);
     for (i, line) in reader.lines().enumerate() {
-        let line = match line {
-            Ok(l) => l,
-            Err(e) => {
-                bad += 1;
-                emit_error(&mut out, output, i + 1, "line", &format!("unreadable: {e}"))?;
-                continue;
-            }
-        };
-        let row = match parser.line(i + 1, &line) {
-            Ok(None) => continue,
-            Ok(Some(r)) => r,
-            Err(e) => {
-                bad += 1;
-                emit_error(&mut out, output, e.line, &e.field, &e.why)?;
-                continue;
-            }
+        let Some(row) = next_row(&mut parser, i + 1, line, &mut out, output, &mut bad)? else {
+            continue;
         };
         let t0 = std::time::Instant::now();
         let (rep, fallback) = match chain.step_at(row.t_s, &row.readings_m) {
@@ -202,19 +188,8 @@ pub fn stream_kinematics(
     }
     let (mut solved, mut converged, mut bad) = (0, 0, 0);
     for (i, line) in reader.lines().enumerate() {
-        let row = match line.map(|l| parser.line(i + 1, &l)) {
-            Err(e) => {
-                bad += 1;
-                emit_error(&mut out, output, i + 1, "line", &format!("unreadable: {e}"))?;
-                continue;
-            }
-            Ok(Ok(None)) => continue,
-            Ok(Ok(Some(r))) => r,
-            Ok(Err(e)) => {
-                bad += 1;
-                emit_error(&mut out, output, e.line, &e.field, &e.why)?;
-                continue;
-            }
+        let Some(row) = next_row(&mut parser, i + 1, line, &mut out, output, &mut bad)? else {
+            continue;
         };
         let t0 = std::time::Instant::now();
         let rep = match model.solve_readings(&row.readings_m, cablesense::Start::Warm) {
@@ -265,6 +240,34 @@ pub fn stream_kinematics(
         out.flush()?;
     }
     Ok((solved, converged, bad))
+}
+
+/// The row on line `no`: `None` for a line without a row (header, blank) and for a
+/// bad one, which is reported (naming its line and field) and counted in `bad`.
+fn next_row(
+    parser: &mut ReadingsParser,
+    no: usize,
+    line: std::io::Result<String>,
+    out: &mut impl Write,
+    output: Output,
+    bad: &mut usize,
+) -> std::io::Result<Option<ReadingRow>> {
+    let parsed = match line {
+        Ok(l) => parser.line(no, &l),
+        Err(e) => {
+            *bad += 1;
+            emit_error(out, output, no, "line", &format!("unreadable: {e}"))?;
+            return Ok(None);
+        }
+    };
+    match parsed {
+        Ok(row) => Ok(row),
+        Err(e) => {
+            *bad += 1;
+            emit_error(out, output, e.line, &e.field, &e.why)?;
+            Ok(None)
+        }
+    }
 }
 
 fn emit_error(
