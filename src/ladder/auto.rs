@@ -295,7 +295,7 @@ impl Probe {
 }
 
 /// The items of `v` where `keep` is true.
-fn filter<T: Clone>(v: &[T], keep: &[bool]) -> Vec<T> {
+pub(super) fn filter<T: Clone>(v: &[T], keep: &[bool]) -> Vec<T> {
     v.iter()
         .zip(keep)
         .filter(|(_, k)| **k)

@@ -25,7 +25,7 @@
 //! `probe_factor` hold the *positions of the rows* in the slice given (0-based), not
 //! load factors. [`AutoSettings::probe_factors`] is not used.
 
-use super::auto::{check_inputs, distance, finish, loose_reference, median, report, Probe};
+use super::auto::{check_inputs, distance, filter, finish, loose_reference, median, report, Probe};
 use super::{AutoChoice, AutoSettings, LadderError, ReadingsModel, Rung};
 use crate::error::ModelError;
 use crate::loads::Loads;
@@ -74,16 +74,9 @@ pub fn choose_readings(
             "the reference did not converge at any probe row".into(),
         ));
     }
-    let labels: Vec<f64> = (0..rows.len())
-        .filter(|&i| keep[i])
-        .map(|i| i as f64)
-        .collect();
-    let rows: Vec<Vec<f64>> = rows
-        .iter()
-        .zip(&keep)
-        .filter(|(_, k)| **k)
-        .map(|(r, _)| r.clone())
-        .collect();
+    let positions: Vec<f64> = (0..rows.len()).map(|i| i as f64).collect();
+    let labels = filter(&positions, &keep);
+    let rows = filter(rows, &keep);
     let refp = all.kept(&keep);
     let (ref_tip, ref_cable) = match loose_reference(&settings.reference) {
         Some((loose, k)) => {
