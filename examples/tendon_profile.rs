@@ -84,11 +84,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             if verbose {
                 println!(
-                    "line {:4} {:?} it {} fw {} slack {} f64 {} dual {} local {} {:.0} us",
+                    "line {:4} {:?} it {} fw {} sh {} slack {} f64 {} dual {} local {} {:.0} us",
                     row.line,
                     rep.status,
                     rep.iterations,
                     rep.forward_solves,
+                    rep.shooting_solves,
                     rep.slack,
                     f,
                     d,

@@ -274,3 +274,45 @@ fn bad_tendon_input_is_named() {
     // the workspace still works after bad readings
     solve(&mut ws, &[1e-4]);
 }
+
+/// `TendonSettings::max_shooting_solves` bounds a row's work: a pull the robot cannot
+/// follow (82 mm on the shipped two-segment TDCR's 0.1 m segments; a fuzz input that
+/// ran 108 shooting solves and 2.5 s before stalling) stops at the budget with
+/// `max_iterations`, and the workspace still solves the next, reachable row (from
+/// cold, as a stream's fallback would, and warm).
+#[test]
+fn a_row_stops_at_its_budget_of_forward_solves() {
+    use cablesense::tendons::TendonSettings;
+    use cablesense::SolveStatus;
+    let scene = Scene::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/tdcr_two_segment.toml"
+    ))
+    .expect("shipped scene");
+    let mut ws = scene.tendon_workspace().expect("scene builds");
+    let reachable = [4e-4, -2e-4, -2e-4, 1e-4, 0.0, 0.0];
+    let rep = ws.solve_readings(&reachable).expect("valid readings");
+    assert!(rep.status.is_converged(), "{rep:?}");
+    let tip = ws.tip_position();
+    for budget in [1, 5, 12] {
+        let mut w = ws.clone();
+        w.set_tendon_settings(TendonSettings {
+            max_shooting_solves: budget,
+            ..TendonSettings::default()
+        });
+        let rep = w
+            .solve_readings(&[0.082, -0.052, 0.051, 0.002, -0.001, -0.001])
+            .expect("finite readings");
+        assert!(rep.shooting_solves <= budget, "{budget}: {rep:?}");
+        assert_eq!(rep.status, SolveStatus::MaxIterations, "{budget}: {rep:?}");
+        // the next row, from cold (a stream's fallback) and then warm
+        w.set_tendon_settings(TendonSettings::default());
+        let rep = w
+            .solve_readings_from(&reachable, Start::Cold)
+            .expect("valid readings");
+        assert!(rep.status.is_converged(), "{budget}: {rep:?}");
+        assert!((w.tip_position() - tip).norm() < 1e-9, "{budget}");
+        let rep = w.solve_readings(&reachable).expect("valid readings");
+        assert!(rep.status.is_converged(), "{budget}: {rep:?}");
+    }
+}

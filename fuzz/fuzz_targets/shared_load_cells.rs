@@ -13,9 +13,10 @@
 //! solves capped at `shared_tdcr::MAX_ITERATIONS` Newton iterations and
 //! `shared_tdcr::MAX_CONTINUATION_STEPS` continuation steps (`shared.rs` caps the `scene_*`
 //! targets' solves at 6 and 4), at most [`MAX_ESTIMATE_ITERATIONS`] estimator
-//! iterations per row (the tendon iterations inside each forward solve stay at the
-//! library's default: the estimator does not expose its tendon settings). A row that runs out of this budget ends with a non-converged status, which
-//! the checks accept (its estimate is checked like any other).
+//! iterations per row, and inside each forward solve the tendon iteration's budget of
+//! `shared_tdcr::tendon_settings` (`TendonLoadEstimator::set_tendon_settings`). A row
+//! that runs out of this budget ends with a non-converged status, which the checks
+//! accept (its estimate is checked like any other).
 //!
 //! The scene and its estimator (whose construction runs the tendon workspace's
 //! reference solve) are built once per process and cloned per input: every input
@@ -68,7 +69,8 @@ fn template(robot: Robot) -> &'static (Scene, TendonLoadEstimator) {
     };
     cell.get_or_init(|| {
         let scene = scene(robot);
-        let est = load_cells::estimator(&scene).expect("scene builds");
+        let mut est = load_cells::estimator(&scene).expect("scene builds");
+        est.set_tendon_settings(shared_tdcr::tendon_settings());
         (scene, est)
     })
 }

@@ -9,8 +9,9 @@
 //! Budget of one input (both robots): at most [`MAX_ROWS`] solved rows, forward
 //! solves capped at `shared_tdcr::MAX_ITERATIONS` Newton iterations and
 //! `shared_tdcr::MAX_CONTINUATION_STEPS` continuation steps (`shared.rs` caps the `scene_*`
-//! targets' solves at 6 and 4), at most [`MAX_TENDON_ITERATIONS`] Newton iterations on the
-//! tensions. A row that runs out of this budget ends with a non-converged status,
+//! targets' solves at 6 and 4), and the tendon iteration's budget of
+//! `shared_tdcr::tendon_settings` (Newton iterations on the tensions, shooting solves
+//! per row). A row that runs out of this budget ends with a non-converged status,
 //! which the checks accept as a clean failure (the state must still be usable by the
 //! next row: its converged report is checked like any other).
 //!
@@ -25,7 +26,7 @@
 
 #![allow(dead_code)]
 
-use cablesense::tendons::{TendonSettings, TendonWorkspace};
+use cablesense::tendons::TendonWorkspace;
 use cablesense::Scene;
 use std::sync::OnceLock;
 
@@ -35,8 +36,6 @@ pub use shared_tdcr::{robot_for, Robot};
 
 const SCENE: &str = include_str!("../../data/scenes/tdcr_two_segment.toml");
 
-/// Newton iterations on the tensions per row (the library's default is 30).
-pub const MAX_TENDON_ITERATIONS: usize = 5;
 /// Rows solved per input (every row is parsed and checked).
 pub const MAX_ROWS: usize = 4;
 /// The robot's scene (numerics capped) and its freshly built workspace (built once
@@ -51,10 +50,7 @@ fn template(robot: Robot) -> &'static (Scene, TendonWorkspace) {
     cell.get_or_init(|| {
         let scene = shared_tdcr::scene(SCENE, robot);
         let mut ws = scene.tendon_workspace().expect("scene builds");
-        ws.set_tendon_settings(TendonSettings {
-            max_iterations: MAX_TENDON_ITERATIONS,
-            ..TendonSettings::default()
-        });
+        ws.set_tendon_settings(shared_tdcr::tendon_settings());
         (scene, ws)
     })
 }

@@ -11,6 +11,7 @@
 
 #![allow(dead_code)]
 
+use cablesense::tendons::TendonSettings;
 use cablesense::{Integrator, Scene};
 
 /// Newton iterations of one forward (shooting) solve. A row whose solve stalls ran
@@ -21,6 +22,23 @@ use cablesense::{Integrator, Scene};
 pub const MAX_ITERATIONS: usize = 6;
 /// Load-continuation steps of one forward solve (see [`MAX_ITERATIONS`]).
 pub const MAX_CONTINUATION_STEPS: usize = 2;
+/// Newton iterations on the tensions per row (the library's default is 30).
+pub const MAX_TENDON_ITERATIONS: usize = 5;
+/// Nested shooting solves per row (`TendonSettings::max_shooting_solves`, default
+/// 200): a row the solver cannot reach (an 80 mm pull on the shipped scene) ran 108 of them in
+/// 2.5 s, most of an input's time.
+pub const MAX_SHOOTING_SOLVES: usize = 12;
+
+/// The tendon iteration's budget in both targets: [`MAX_TENDON_ITERATIONS`],
+/// [`MAX_SHOOTING_SOLVES`], the rest the library's defaults.
+pub fn tendon_settings() -> TendonSettings {
+    TendonSettings {
+        max_iterations: MAX_TENDON_ITERATIONS,
+        max_shooting_solves: MAX_SHOOTING_SOLVES,
+        ..TendonSettings::default()
+    }
+}
+
 /// Disks per segment of the small robot (every 20 mm). Two disks with 4 or 8 RK4
 /// steps were as costly per input (their rows stalled three times as often).
 const SMALL_DISKS: usize = 5;

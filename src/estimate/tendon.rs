@@ -110,6 +110,11 @@ impl TendonModel {
     pub fn tendons(&self) -> &TendonWorkspace {
         &self.tw
     }
+    /// The tendon workspace, to change its settings
+    /// ([`TendonWorkspace::set_tendon_settings`]).
+    pub fn tendons_mut(&mut self) -> &mut TendonWorkspace {
+        &mut self.tw
+    }
 }
 
 impl EstimationModel for TendonModel {
@@ -384,6 +389,12 @@ impl TendonLoadEstimator {
     /// The estimator (status, covariance, spec, `set_theta` for a fallback).
     pub fn estimator(&mut self) -> &mut Estimator<TendonModel> {
         &mut self.est
+    }
+
+    /// Settings of the tendon iteration inside every forward solve (budget,
+    /// tolerance; default [`crate::tendons::TendonSettings::default`]).
+    pub fn set_tendon_settings(&mut self, settings: crate::tendons::TendonSettings) {
+        self.est.ws.tendons_mut().set_tendon_settings(settings);
     }
 
     /// Names of the driven tendons, in reading order.

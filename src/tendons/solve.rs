@@ -54,6 +54,16 @@ pub struct TendonSettings {
     /// together (`joint` submodule), handing back to the nested method when it does
     /// not converge (default true; false runs the nested method only).
     pub joint_newton: bool,
+    /// Nested shooting solves one row may run ([`TendonReport::shooting_solves`]:
+    /// each a full Newton solve of the rod at fixed tensions, with continuation and
+    /// branch checks when it needs them; line-search trials included; default 200).
+    /// A row that reaches it ends with `max_iterations`, so a row the solver cannot
+    /// reach costs a bounded amount of work (a control loop's worst tick; the fuzz
+    /// targets set 12). The joint path's single passes are bounded by its own
+    /// iteration and substep limits and not counted. Measured: an unreachable 82 mm
+    /// pull on the two-segment TDCR's 0.1 m segments ran 108 shooting solves in 2.5 s
+    /// before stalling.
+    pub max_shooting_solves: usize,
 }
 
 impl Default for TendonSettings {
@@ -62,6 +72,7 @@ impl Default for TendonSettings {
             max_iterations: 30,
             tolerance_m: 1e-12,
             joint_newton: true,
+            max_shooting_solves: 200,
         }
     }
 }
@@ -75,8 +86,12 @@ pub struct TendonReport {
     pub iterations: usize,
     /// `max_i |G_i|` at the returned point (m).
     pub residual_m: f64,
-    /// Shooting solves run (line-search trials included).
+    /// Shooting solves and joint passes run (line-search trials included).
     pub forward_solves: usize,
+    /// Of those, nested shooting solves (full Newton solves at fixed tensions; the
+    /// rest are the joint path's single passes): what
+    /// [`TendonSettings::max_shooting_solves`] bounds.
+    pub shooting_solves: usize,
     /// Tendons that are slack at the returned point.
     pub slack: usize,
 }
@@ -248,6 +263,7 @@ impl TendonWorkspace {
                 iterations: 0,
                 residual_m: f64::INFINITY,
                 forward_solves: 0,
+                shooting_solves: 0,
                 slack: 0,
             },
             driven,
@@ -431,6 +447,7 @@ impl TendonWorkspace {
             iterations: 0,
             residual_m: f64::INFINITY,
             forward_solves: 0,
+            shooting_solves: 0,
             slack: 0,
         };
         // the warm fast path (mu = 0, or friction factors that stay put)
@@ -579,7 +596,12 @@ impl TendonWorkspace {
         self.theta[..p].copy_from_slice(&self.t);
         // first-order predictor of the shooting unknowns from the last sweep
         self.ws.set_theta_predicted(&self.theta);
+        if self.report.shooting_solves >= self.settings.max_shooting_solves {
+            self.report.status = SolveStatus::MaxIterations;
+            return false;
+        }
         self.report.forward_solves += 1;
+        self.report.shooting_solves += 1;
         let rep = self.ws.solve(start);
         if !rep.status.is_converged() {
             self.report.status = rep.status;
