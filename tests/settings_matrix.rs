@@ -21,9 +21,12 @@
 //! `cargo test --release --test settings_matrix -- --ignored --nocapture`
 //! (it prints the table the README's is written from). On 2 busy shared cores, with
 //! `SETTINGS_MATRIX_LAMBDAS=0.25,0.5,1,2`, the thesis scenes, the track demo and the
-//! two-section demo took 8 minutes, `ftdcr_v4` 1 minute; `tdcr_two_segment` needs
-//! hours (Kirchhoff or adaptive tendon solves of 5-160 s each) and was stopped after
-//! 18 of its 64 combinations; `tdcr_modeling` spends 6 s per exact solve at factor 1.
+//! two-section demo took 8 minutes, `ftdcr_v4` 1 minute; `tdcr_modeling` spends 6 s
+//! per exact solve at factor 1. `tdcr_two_segment` (session 10, 2026-11-27, with the
+//! tendon rows' budget of `TendonSettings::max_shooting_solves`): all 64 combinations
+//! at 0.25, 0.5 and 1 in 316 s beside other work (its failing solves at factor 2 take
+//! 1-186 s each, so factor 2 was run for the first 11 combinations only: every one
+//! `stalled` there, cleanly); in 2026-11-24 it had been stopped after 18 of 64.
 //!
 //! In normal CI each scene runs 8 of the combinations (a covering design: every value
 //! of every setting at least twice; 4 on tendon scenes, 6 on `tdcr_modeling`) at the
@@ -46,7 +49,7 @@ const CLAIMS: [(&str, f64, f64); 12] = [
     ("scenes/track_demo.toml", 2.0, 2.0),
     ("scenes/tdcr_modeling.toml", 1.0, 0.25),
     ("scenes/ftdcr_v4.toml", 1.0, 1.0),
-    ("scenes/tdcr_two_segment.toml", 0.5, 0.25),
+    ("scenes/tdcr_two_segment.toml", 1.0, 0.5),
     // continuous routing; claimed from the CI sample only (not the full sweep)
     ("scenes/till_tendon_robot.toml", 1.0, 1.0),
     // continuous routing, displacement-driven; claimed from the CI sample only
@@ -69,6 +72,22 @@ const EXCEPTIONS: [(&str, CableCoupling, bool, f64); 1] = [(
     false,
     0.0,
 )];
+
+/// Rod models claimed lower than their scene's claim (both continuation settings):
+/// (scene, rod model, claimed factor). On `tdcr_two_segment` (session 10's full
+/// sweep of its 64 combinations at 0.25, 0.5 and 1: every Cosserat one reaches 1 with
+/// continuation and 0.5 without) a Kirchhoff rod with the scene's RK4 20 ends
+/// `stalled` at factor 0.5 (1 mm readings; the tension iteration's merit falls from
+/// 1e-3 to 7e-5 m in 9 steps and stops, tensions near 60 N) for every guide-mass
+/// model, with continuation on and off, and with adaptive steps it reaches 0.5 or 1
+/// with continuation and 0.25 without. The scene's claim of 0.5 (all rods) came from
+/// the partial sweep of 2026-11-24 (`9bb275a`), where the Kirchhoff solve at 0.5
+/// converged in 8 tension iterations. Bisected: lost with `3d513ed` (the condensed
+/// coupling's first-order prediction of the next holes); disabling that prediction
+/// on today's main does not bring it back (still `stalled` at 0.5), so the cold
+/// Kirchhoff tendon solve at ~60 N is on a knife's edge, not broken by one line.
+const ROD_EXCEPTIONS: [(&str, RodModel, f64); 1] =
+    [("scenes/tdcr_two_segment.toml", RodModel::Kirchhoff, 0.25)];
 
 /// Scenes whose exact coupling is too costly above the shipped load for a test: on
 /// `tdcr_modeling` (90 shooting unknowns) one cold exact solve took 6.4 s at factor 1
@@ -285,11 +304,15 @@ fn claim(name: &str, combo: &Combo) -> f64 {
     let exception = EXCEPTIONS.iter().find(|(n, coupling, cont, _)| {
         *n == name && *coupling == combo.coupling && *cont == combo.continuation
     });
-    match exception {
+    let claimed = match exception {
         Some(e) => e.3,
         None if combo.continuation => c.1,
         None => c.2,
-    }
+    };
+    ROD_EXCEPTIONS
+        .iter()
+        .filter(|(n, rod, _)| *n == name && *rod == combo.rod)
+        .fold(claimed, |c, e| c.min(e.2))
 }
 
 fn combos_for(scene: &Scene, combos: Vec<Combo>) -> Vec<Combo> {
@@ -397,7 +420,7 @@ fn thesis_scenes() {
 /// summary the README's table is written from; asserts the claims and clean failures.
 /// `SETTINGS_MATRIX_SCENE=track` restricts it to scenes whose name contains `track`.
 #[test]
-#[ignore = "the full matrix: hours on 2 shared cores (see the module docs)"]
+#[ignore = "the full matrix: an hour or more on 2 shared cores (see the module docs)"]
 fn full_sweep() {
     let only = std::env::var("SETTINGS_MATRIX_SCENE").ok();
     // SETTINGS_MATRIX_COMBOS=covering: only the 8 combinations of the CI sample;
