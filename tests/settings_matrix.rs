@@ -84,8 +84,14 @@ const EXCEPTIONS: [(&str, CableCoupling, bool, f64); 1] = [(
 /// the partial sweep of 2026-11-24 (`9bb275a`), where the Kirchhoff solve at 0.5
 /// converged in 8 tension iterations. Bisected: lost with `3d513ed` (the condensed
 /// coupling's first-order prediction of the next holes); disabling that prediction
-/// on today's main does not bring it back (still `stalled` at 0.5), so the cold
-/// Kirchhoff tendon solve at ~60 N is on a knife's edge, not broken by one line.
+/// on today's main does not bring it back. Why it is fragile: at the stalled point
+/// (tensions 61 N in the first segment, 31 N in the second; a Cosserat rod needs 26
+/// and 9 N, its axial compression taking up part of the pull) a warm shooting solve
+/// with one tension moved by 1e-4 N ends `non_finite` (15 continuation steps): the
+/// inextensible rod is near a singular equilibrium there (about 270 N of tendon
+/// compression in the first segment, its three tendons and the second segment's
+/// three passing through, against about 290 N, the Euler load of one 10 mm disk span
+/// of the 1 mm rod at 60 GPa), so `stalled` is the honest answer, not a lost solution.
 const ROD_EXCEPTIONS: [(&str, RodModel, f64); 1] =
     [("scenes/tdcr_two_segment.toml", RodModel::Kirchhoff, 0.25)];
 
