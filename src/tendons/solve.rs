@@ -593,13 +593,13 @@ impl TendonWorkspace {
     /// `false` when the shooting solve or the sweep failed.
     fn evaluate(&mut self, start: Start, sweep: bool) -> bool {
         let p = self.driven.len();
-        self.theta[..p].copy_from_slice(&self.t);
-        // first-order predictor of the shooting unknowns from the last sweep
-        self.ws.set_theta_predicted(&self.theta);
         if self.report.shooting_solves >= self.settings.max_shooting_solves {
             self.report.status = SolveStatus::MaxIterations;
             return false;
         }
+        self.theta[..p].copy_from_slice(&self.t);
+        // first-order predictor of the shooting unknowns from the last sweep
+        self.ws.set_theta_predicted(&self.theta);
         self.report.forward_solves += 1;
         self.report.shooting_solves += 1;
         let rep = self.ws.solve(start);
