@@ -302,8 +302,13 @@ fn missing_and_nan_samples() {
 
 /// Bounds by projection: problem (c) with the tension of cable 0 bounded above at
 /// 0.5 N while the truth is 1.2 N. Joint and nested (projected LM) both stop at the
-/// bound with the same other tension (1e-6 relative), and the joint shape is an
-/// equilibrium.
+/// bound with the same other tension (5e-6 relative), and the joint shape is an
+/// equilibrium. Both end `Stalled`: with the truth outside the bound the cost stays
+/// large, and a step that lowers it by less than its round-off is refused, so the
+/// free tension is resolved only to about `sqrt(eps C / C'')`. Seen: 0.7e-6 relative
+/// apart, 2.1e-6 after the condensed coupling's linear segment retry (the nested
+/// method's stop point moved by 1.4e-6; the joint one by 5e-13); a forward
+/// tolerance of 1e-11 or 1e-12 moves neither (checked after the change).
 #[test]
 fn bounds_are_respected_like_the_nested_method() {
     let mut pb = problem_c();
@@ -322,7 +327,7 @@ fn bounds_are_respected_like_the_nested_method() {
         nested.theta()
     );
     assert_eq!(j.theta()[0], 0.5, "at the bound: {:?}", j.theta());
-    Tol::both(1e-10, 1e-6).check("joint vs nested", j.theta(), nested.theta());
+    Tol::both(1e-10, 5e-6).check("joint vs nested", j.theta(), nested.theta());
     assert!(equilibrium_residual(j.workspace()) <= 1e-10);
 }
 

@@ -17,7 +17,9 @@ use super::continuous;
 use super::plan::{Event, ParamSite, Plan, JUMP_DIRS};
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
 use crate::math::Real;
-use condensed::{fold_segment, jump_block, seed_jump, settle_segment, store_dnext, transport_next};
+use condensed::{
+    fold_segment, jump_block, linear_retry, seed_jump, settle_segment, store_dnext, transport_next,
+};
 pub(crate) use condensed::{local_next, local_next_len, set_local_next};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -87,6 +89,14 @@ pub(crate) struct PassBuf<T: Real> {
     pub mlin: Vec<Vec<f64>>,
     /// `mlin` holds matrices from a sweep (else the plain fixed point is used).
     pub mlin_valid: bool,
+    /// Condensed coupling: per guide with pending chords, the segment's state map
+    /// `d y(next disk) / d j` (`STATE_ROWS x JUMP_DIRS` row-major; rows `r`, `R`
+    /// column by column, `n`, `m`) of the jump `j` of `(n, m)` at the guide, written
+    /// by dual passes; `f64` passes correct a segment's end state with it instead of
+    /// re-integrating the segment after a small local step (`condensed::linear_retry`).
+    pub seg_map: Vec<Vec<f64>>,
+    /// `seg_map` holds matrices from a sweep.
+    pub seg_map_valid: bool,
     /// Dual passes: `B = d(n, m)/dq` of the last disk with pending chords
     /// (`6 x L` row-major).
     jump_b: Vec<f64>,
@@ -145,6 +155,18 @@ impl<T: Real> PassBuf<T> {
                 .map(|p| vec![0.0; 9 * p.len() * p.len()])
                 .collect(),
             mlin_valid: false,
+            seg_map: plan
+                .pending
+                .iter()
+                .map(|p| {
+                    if p.is_empty() {
+                        Vec::new()
+                    } else {
+                        vec![0.0; condensed::STATE_ROWS * JUMP_DIRS]
+                    }
+                })
+                .collect(),
+            seg_map_valid: false,
             anchor: vec![(Vector3::zeros(), Matrix3::identity()); plan.pending.len()],
             dnext: plan
                 .pending
@@ -407,7 +429,9 @@ pub(crate) fn pass<T: Real>(
                     if T::DIRS > 0 {
                         fold_segment(plan, buf, &mut y, ck.g);
                         store_dnext(plan, buf, &y, &ck.y, ck.g);
-                    } else if !settle_segment(plan, buf, &y, ck) {
+                    } else if !settle_segment_linear(
+                        plan, buf, &mut y, ck, load_scale, &mut rec, &c,
+                    ) {
                         if ck.iterations > MAX_LOCAL_ITERATIONS {
                             return Err(PassError::Coupling(iv.s1));
                         }
@@ -469,6 +493,39 @@ pub(crate) fn pass<T: Real>(
         return Err(PassError::NonFinite(ls));
     }
     Ok(y)
+}
+
+/// [`settle_segment`], with small local steps carried to the segment's end by
+/// [`linear_retry`] (no re-integration) while they last: `true` once the holes agree;
+/// `false` with the assumed holes updated for a re-integration of the segment.
+fn settle_segment_linear<T: Real>(
+    plan: &Plan,
+    buf: &mut PassBuf<T>,
+    y: &mut State<T>,
+    ck: &mut Checkpoint<T>,
+    load_scale: f64,
+    rec: &mut Option<&mut Recording>,
+    c: &crate::integrate::Coeffs,
+) -> bool {
+    let mut linear = false;
+    loop {
+        if settle_segment(plan, buf, y, ck) {
+            break;
+        }
+        if ck.iterations > MAX_LOCAL_ITERATIONS || !linear_retry(plan, buf, y, ck, load_scale) {
+            return false;
+        }
+        linear = true;
+    }
+    if let (true, Some(r)) = (linear, rec.as_deref_mut()) {
+        // the sample at this disk holds the state before the correction
+        if r.samples.len() > ck.samples {
+            if let Some(last) = r.samples.pop() {
+                push_sample(r, last.s, y, c);
+            }
+        }
+    }
+    true
 }
 
 /// Bookkeeping after one RK4 step ending at arc length `s1`: the RHS count, the

@@ -22,6 +22,19 @@ use crate::math::Real;
 use crate::statics::plan::{Plan, JUMP_DIRS};
 use nalgebra::{Matrix3, Vector3};
 
+/// Rows of a segment's state map ([`PassBuf::seg_map`]): `r` (3), `R` (9, column by
+/// column), `n` (3), `m` (3).
+pub(crate) const STATE_ROWS: usize = 18;
+
+/// Largest local step (fraction of the rod length, any hole coordinate) that an `f64`
+/// pass carries to the segment's end through the sweep's state map instead of
+/// re-integrating the segment (see [`linear_retry`]). The step after the load-path
+/// predictor is about this size. At 1e-11 the map's staleness (a fraction of the
+/// step) showed as noise in central differences of the converged poses over a 1e-5
+/// relative parameter step: `tests/calibrate_exact_sensitivities.rs` saw 2.2e-4
+/// relative disagreement against its 1e-4 (2.6e-6 at 1e-13, as before the change).
+pub(super) const LINEAR_STEP: f64 = 1e-13;
+
 /// A segment whose hole error is below this fraction of the rod length and no longer
 /// halves per iteration has reached round-off.
 pub(super) const LOCAL_FLOOR: f64 = 1e-13;
@@ -192,9 +205,30 @@ pub(super) fn settle_segment<T: Real>(
     // (the plain fixed point) before any sweep, improved by Broyden's inverse update
     // from the last attempt's secant (dg dq: observed change of g over step dq),
     // H <- H - (dq + H dg) dg^T / (dg^T dg), so a stale M or strong coupling near
-    // doubling back still converges superlinearly.
-    let h = &mut buf.settle_h[..l * l];
+    // doubling back still converges superlinearly. The first step uses the sweep's
+    // M (or I) in place; H is a copy only once a Broyden update needs one (most
+    // segments settle after one step; with 27 hole coordinates the copy was a
+    // 729-value copy per disk).
     if ck.iterations == 0 {
+        let m = &buf.mlin[ck.g];
+        for (i, &(j, k)) in pend.iter().enumerate() {
+            for a in 0..3 {
+                let r = 3 * i + a;
+                let step = if buf.mlin_valid {
+                    (0..l).map(|c| m[r * l + c] * err[c]).sum()
+                } else {
+                    err[r]
+                };
+                buf.prev_step[r] = step;
+                buf.prev_err[r] = err[r];
+                buf.next[j][k][a] += step;
+            }
+        }
+        ck.iterations += 1;
+        return false;
+    }
+    let h = &mut buf.settle_h[..l * l];
+    if ck.iterations == 1 {
         for r in 0..l {
             for c in 0..l {
                 h[r * l + c] = if buf.mlin_valid {
@@ -206,7 +240,9 @@ pub(super) fn settle_segment<T: Real>(
                 };
             }
         }
-    } else {
+    }
+    {
+        // Broyden's inverse update from the last step
         let mut dg = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
         let mut dd = 0.0;
         for r in 0..l {
@@ -330,6 +366,21 @@ pub(super) fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut S
             }
         }
     }
+    // the segment's state map d y / d j, before the fold (see `seg_map`)
+    if let Some(map) = buf
+        .seg_map
+        .get_mut(g)
+        .filter(|m| m.len() == STATE_ROWS * JUMP_DIRS)
+    {
+        let rows =
+            y.r.iter()
+                .chain(y.rot.iter())
+                .chain(y.n.iter())
+                .chain(y.m.iter());
+        for (row, z) in map.chunks_exact_mut(JUMP_DIRS).zip(rows) {
+            row.copy_from_slice(&z.eps()[nout..nout + JUMP_DIRS]);
+        }
+    }
     // a singular segment map leaves the Jacobian inexact (the outer Newton's line
     // search tolerates that) and drops M
     buf.mlin_valid = solved;
@@ -355,4 +406,86 @@ pub(super) fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut S
     if !plan.routed.is_empty() {
         buf.lengths.iter_mut().for_each(fold);
     }
+}
+
+/// `f64` pass at the disk after `ck.g`, right after [`settle_segment`] moved the
+/// assumed next holes by its step (`prev_step`): when that step is at most
+/// [`LINEAR_STEP`] of the rod length, carry its effect to the segment's end state to
+/// first order, `y += S dj`, instead of re-integrating the segment, and return `true`.
+/// `dj` is the exact change of the chord jump of `(n, m)` at guide `ck.g`
+/// (`-(df, arm x df)`, `df = t (u(q + dq) - u(q))`, as `apply_event` applies it) and
+/// `S = d y / d j` the segment's state map from the last dual sweep (`seg_map`).
+///
+/// Why it is accurate: a re-integration would move the end state by `S dj + O(dj^2)`;
+/// with steps below `LINEAR_STEP`, the neglected `O(dj^2)` is below round-off, and
+/// `S`'s staleness since the sweep (the segment's shape change over some load steps,
+/// a small fraction of `S`) leaves a fraction of a 1e-13 L step, near `LOCAL_TOL`.
+/// The holes are then checked again against the corrected state by
+/// [`settle_segment`]. Measured (`examples/till_ramp_profile.rs`, Till's robot on 100
+/// disks, 5 000 warm ramp solves): gap re-integrations 108.4 -> 6.2 and `f64` RHS
+/// 1 164 -> 755 a solve, tips within 5e-11 m of the re-integrating pass (which is
+/// itself 4e-11 m from a solve at the tolerance floor); FTDCR v4 val rows
+/// (`examples/tendon_profile.rs`): `f64` RHS 2 403 -> 2 238 a row, tips within
+/// 1e-11 m, statuses and taut flags unchanged.
+/// Only with fixed RK4 steps (an adaptive re-integration may choose other steps) and
+/// without continuously routed tendons (their integrated lengths are states the map
+/// does not carry).
+pub(super) fn linear_retry<T: Real>(
+    plan: &Plan,
+    buf: &PassBuf<T>,
+    y: &mut State<T>,
+    ck: &Checkpoint<T>,
+    load_scale: f64,
+) -> bool {
+    let pend = &plan.pending[ck.g];
+    let l = 3 * pend.len();
+    let map = &buf.seg_map[ck.g];
+    let usable = T::DIRS == 0
+        && buf.seg_map_valid
+        && map.len() == STATE_ROWS * JUMP_DIRS
+        && plan.routed.is_empty()
+        && matches!(plan.integrator, crate::settings::Integrator::Rk4 { .. });
+    let small = |d: &f64| d.abs() <= LINEAR_STEP * plan.length;
+    if !usable || !buf.prev_step[..l].iter().all(small) {
+        return false;
+    }
+    let (r, rot) = (ck.y.r.map(|x| x.re()), ck.y.rot.map(|x| x.re()));
+    let mut dj = [0.0; JUMP_DIRS];
+    for (i, &(j, k)) in pend.iter().enumerate() {
+        let c = &plan.cables[j];
+        let arm = rot * c.hole_local[k];
+        let p = r + arm;
+        let mut t = c.tension;
+        if let Some(kp) = plan.tension_param[j] {
+            t += buf.theta[kp].re();
+        }
+        let t_next = t * load_scale * c.factor[k + 1];
+        let q = buf.next[j][k];
+        let dq = Vector3::new(
+            buf.prev_step[3 * i],
+            buf.prev_step[3 * i + 1],
+            buf.prev_step[3 * i + 2],
+        );
+        let df = (super::unit(q - p) - super::unit(q - dq - p)) * t_next;
+        let dm = arm.cross(&df);
+        for a in 0..3 {
+            dj[a] -= df[a];
+            dj[3 + a] -= dm[a];
+        }
+    }
+    // rows r (3), R (9, column-major as stored), n (3), m (3); indexed, not a chain
+    // of iterators (that was most of this function's cost)
+    let mut d = [0.0; STATE_ROWS];
+    for (dr, row) in d.iter_mut().zip(map.chunks_exact(JUMP_DIRS)) {
+        *dr = (0..JUMP_DIRS).map(|c| row[c] * dj[c]).sum();
+    }
+    for a in 0..3 {
+        y.r[a] = T::cst(y.r[a].re() + d[a]);
+        y.n[a] = T::cst(y.n[a].re() + d[12 + a]);
+        y.m[a] = T::cst(y.m[a].re() + d[15 + a]);
+    }
+    for (z, da) in y.rot.as_mut_slice().iter_mut().zip(&d[3..12]) {
+        *z = T::cst(z.re() + da);
+    }
+    true
 }

@@ -44,6 +44,7 @@ impl Workspace {
         if p.condensed {
             // straight-rod next holes; a cold start does not reuse an old segment map
             self.b64.mlin_valid = false;
+            self.b64.seg_map_valid = false;
             self.b64.dnext_valid = false;
             for (j, c) in p.cables.iter().enumerate() {
                 let route = &self.robot.cables()[j].route;
