@@ -29,7 +29,7 @@ const MULTI_FALLBACK: f64 = 5.0;
 
 impl Workspace {
     fn multi_allowed(&self, intensity: f64) -> bool {
-        Multi::supports(&self.plan) && intensity <= MULTI_MAX_INTENSITY
+        self.multi_supported && intensity <= MULTI_MAX_INTENSITY
     }
 
     /// Multiple shooting instead of single shooting for this solve (module docs), or
