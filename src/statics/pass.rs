@@ -631,11 +631,7 @@ fn apply_event<T: Real>(
                 if !c.tensioned {
                     continue;
                 }
-                let mut t = T::cst(c.tension);
-                if let Some(k) = plan.tension_param[j] {
-                    t += buf.theta[k];
-                }
-                let t = t.scale(load_scale);
+                let t = actuator_tension(plan, buf, j, load_scale);
                 let prev = if k == 0 {
                     v3::<T>(&c.base_hole)
                 } else {
@@ -677,6 +673,17 @@ fn apply_event<T: Real>(
             }
         }
     }
+}
+
+/// Tension of cable `j` at its actuator (N) at `load_scale`: the given value plus its
+/// load parameter, if any (the chords' shares follow from the capstan factors).
+#[inline]
+fn actuator_tension<T: Real>(plan: &Plan, buf: &PassBuf<T>, j: usize, load_scale: f64) -> T {
+    let mut t = T::cst(plan.cables[j].tension);
+    if let Some(k) = plan.tension_param[j] {
+        t += buf.theta[k];
+    }
+    t.scale(load_scale)
 }
 
 /// Determinant of `d(n, m)/d(n0, m0)` (6 x 6), or of `dm/dm0` (3 x 3) when `n(0)` is

@@ -455,11 +455,8 @@ pub(super) fn linear_retry<T: Real>(
         let c = &plan.cables[j];
         let arm = rot * c.hole_local[k];
         let p = r + arm;
-        let mut t = c.tension;
-        if let Some(kp) = plan.tension_param[j] {
-            t += buf.theta[kp].re();
-        }
-        let t_next = t * load_scale * c.factor[k + 1];
+        // as `apply_event`'s chord towards the next hole
+        let t_next = super::actuator_tension(plan, buf, j, load_scale).re() * c.factor[k + 1];
         let q = buf.next[j][k];
         let dq = Vector3::new(
             buf.prev_step[3 * i],
