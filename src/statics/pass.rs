@@ -11,12 +11,13 @@
 //! inside the pass (module `condensed`).
 
 mod condensed;
+mod lowrank;
 mod small;
 
 use super::continuous;
 use super::plan::{Event, ParamSite, Plan, JUMP_DIRS};
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
-use crate::math::Real;
+use crate::math::{mat_vec_f64, Real};
 use condensed::{
     fold_segment, jump_block, linear_retry, seed_jump, settle_segment, store_dnext, transport_next,
 };
@@ -84,9 +85,12 @@ pub(crate) struct PassBuf<T: Real> {
     /// Condensed coupling: assumed position of hole `k + 1` used by the chord at
     /// route disk `k`, per cable (world, m). Solved by `f64` passes, read by sweeps.
     pub next: Vec<Vec<Vector3<f64>>>,
-    /// Condensed coupling: per guide, `M = (I - dp/dq)^-1` (`L x L` row-major,
-    /// `L = 3 * pending[g].len()`), written by dual passes.
+    /// Condensed coupling: per guide, `M = (I - dp/dq)^-1 = I + C K` as its factors
+    /// and the Broyden terms kept from the last settle (`L = 3 * pending[g].len()`;
+    /// layout in [`lowrank`]), written by dual passes.
     pub mlin: Vec<Vec<f64>>,
+    /// Broyden terms kept in `mlin` per guide.
+    pub mlin_terms: Vec<usize>,
     /// `mlin` holds matrices from a sweep (else the plain fixed point is used).
     pub mlin_valid: bool,
     /// Condensed coupling: per guide with pending chords, the segment's state map
@@ -100,8 +104,12 @@ pub(crate) struct PassBuf<T: Real> {
     /// Dual passes: `B = d(n, m)/dq` of the last disk with pending chords
     /// (`6 x L` row-major).
     jump_b: Vec<f64>,
-    /// Local iteration of `f64` passes: `H` (`L x L`), last error and step.
-    settle_h: Vec<f64>,
+    /// Local iteration of `f64` passes: the Broyden terms of `H` beyond the sweep's
+    /// `C K` (vectors `u_t`, `v_t` of length `L`, row by row; `settle_n` of them),
+    /// last error and step.
+    settle_u: Vec<f64>,
+    settle_v: Vec<f64>,
+    settle_n: usize,
     prev_err: Vec<f64>,
     prev_step: Vec<f64>,
     /// Condensed coupling: pose of each guide when its `next` holes were last
@@ -118,6 +126,8 @@ pub(crate) struct PassBuf<T: Real> {
     pub dnext_valid: bool,
     /// `f64` passes: per guide, `z` at which its `next` holes were last settled.
     z_anchor: Vec<Vec<f64>>,
+    /// `f64` passes: `z - z_anchor` of the guide being transported (scratch).
+    dz: Vec<f64>,
     /// Dual passes: the first outer direction this pass is seeded along and the
     /// width `W` of the full sweep (set by `sweep`).
     pub sweep_c0: usize,
@@ -152,8 +162,9 @@ impl<T: Real> PassBuf<T> {
             mlin: plan
                 .pending
                 .iter()
-                .map(|p| vec![0.0; 9 * p.len() * p.len()])
+                .map(|p| vec![0.0; lowrank::stored_len(3 * p.len())])
                 .collect(),
+            mlin_terms: vec![0; plan.pending.len()],
             mlin_valid: false,
             seg_map: plan
                 .pending
@@ -175,11 +186,14 @@ impl<T: Real> PassBuf<T> {
                 .collect(),
             dnext_valid: false,
             z_anchor: vec![Vec::new(); plan.pending.len()],
+            dz: vec![0.0; plan.n_unknowns + plan.params.len()],
             sweep_c0: 0,
             sweep_w: 0,
             lin: vec![0.0; 36 + JUMP_DIRS * (T::DIRS + 2 * plan.max_pending_dirs)],
             jump_b: vec![0.0; JUMP_DIRS * plan.max_pending_dirs],
-            settle_h: vec![0.0; plan.max_pending_dirs * plan.max_pending_dirs],
+            settle_u: vec![0.0; SETTLE_TERMS * plan.max_pending_dirs],
+            settle_v: vec![0.0; SETTLE_TERMS * plan.max_pending_dirs],
+            settle_n: 0,
             prev_err: vec![0.0; plan.max_pending_dirs],
             prev_step: vec![0.0; plan.max_pending_dirs],
             watch: false,
@@ -208,6 +222,10 @@ pub(crate) enum PassError {
 pub(crate) const LOCAL_TOL: f64 = 1e-15;
 /// Condensed coupling: segment re-integrations allowed per disk.
 const MAX_LOCAL_ITERATIONS: usize = 60;
+/// Room for a local iteration's Broyden terms: the kept ones plus one update per
+/// iteration (an update that finds no room is skipped: `H` stays a valid inverse
+/// estimate, only convergence slows).
+const SETTLE_TERMS: usize = lowrank::KEPT_TERMS + MAX_LOCAL_ITERATIONS + 2;
 
 /// Where a pass can return to re-integrate a segment (condensed coupling).
 struct Checkpoint<T: Real> {
@@ -586,7 +604,10 @@ fn apply_event<T: Real>(
             // n+ = n- - F, m+ = m- - tau (thesis 3.5.1 and 3.5.3: m(s+) = m(s-) - tau_st)
             let p = &plan.points[i];
             let (mut f, tau) = if p.body {
-                (y.rot * v3::<T>(&p.force), y.rot * v3::<T>(&p.torque))
+                (
+                    mat_vec_f64(&y.rot, &p.force),
+                    mat_vec_f64(&y.rot, &p.torque),
+                )
             } else {
                 (v3::<T>(&p.force), v3::<T>(&p.torque))
             };
@@ -617,7 +638,7 @@ fn apply_event<T: Real>(
             }
             for &(j, k) in &plan.guide_cables[g] {
                 let c = &plan.cables[j];
-                let arm = y.rot * v3::<T>(&c.hole_local[k]);
+                let arm = mat_vec_f64(&y.rot, &c.hole_local[k]);
                 let p = y.r + arm;
                 buf.holes[j][k] = p;
                 if let Some(u) = c.unknowns {

@@ -16,7 +16,7 @@
 //! same load integrate the same intervals and steps.
 
 use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
-use crate::math::Real;
+use crate::math::{mat_vec_f64, Real};
 use crate::settings::Integrator;
 use crate::statics::pass::{Pose, Recording, Sample};
 use crate::statics::plan::{Event, ParamSite, Plan};
@@ -364,7 +364,10 @@ fn apply_event<T: Real>(
         Event::Point(i) => {
             let p = &plan.points[i];
             let (mut f, mut tau) = if p.body {
-                (y.rot * v3::<T>(&p.force), y.rot * v3::<T>(&p.torque))
+                (
+                    mat_vec_f64(&y.rot, &p.force),
+                    mat_vec_f64(&y.rot, &p.torque),
+                )
             } else {
                 (v3::<T>(&p.force), v3::<T>(&p.torque))
             };
@@ -408,19 +411,19 @@ fn chords<T: Real>(plan: &Plan, g: usize, y: &mut State<T>, lam: f64, nb: &Nbr<T
         if !c.tensioned {
             continue;
         }
-        let arm = y.rot * v3::<T>(&c.hole_local[k]);
+        let arm = mat_vec_f64(&y.rot, &c.hole_local[k]);
         let p = y.r + arm;
         let t = c.tension * lam;
         let prev = if k == 0 {
             v3::<T>(&c.base_hole)
         } else {
             let Some((r, rot)) = nb.prev else { continue };
-            r + rot * v3::<T>(&c.hole_local[k - 1])
+            r + mat_vec_f64(&rot, &c.hole_local[k - 1])
         };
         let mut f = unit(prev - p).map(|x| x.scale(t * c.factor[k]));
         if k + 1 < c.len {
             if let Some((r, rot)) = nb.next {
-                let next = r + rot * v3::<T>(&c.hole_local[k + 1]);
+                let next = r + mat_vec_f64(&rot, &c.hole_local[k + 1]);
                 f += unit(next - p).map(|x| x.scale(t * c.factor[k + 1]));
             }
         }

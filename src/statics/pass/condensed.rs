@@ -13,12 +13,14 @@
 //! solve whatever the number `k` of cables), which is folded into the outer
 //! directions (the implicit function theorem for the segment), so the outer
 //! derivatives are exact; `M = I + C (I - B C)^-1 B` (Woodbury) is handed to the
-//! `f64` passes.
+//! `f64` passes as its factors `C` and `K = (I - B C)^-1 B` (`lowrank`: a rank-6
+//! correction of `I` costs `12 L` per product, not `L^2`).
 
+use super::lowrank::{self, KEPT_TERMS};
 use super::small::solve_small;
-use super::{v3, Checkpoint, PassBuf};
+use super::{Checkpoint, PassBuf};
 use crate::integrate::State;
-use crate::math::Real;
+use crate::math::{mat_t_vec, mat_vec_f64, Real};
 use crate::statics::plan::{Plan, JUMP_DIRS};
 use nalgebra::{Matrix3, Vector3};
 
@@ -42,7 +44,7 @@ pub(super) const LOCAL_FLOOR: f64 = 1e-13;
 /// Computed position of hole `k + 1` of cable `j` at the current disk.
 #[inline]
 pub(super) fn next_hole<T: Real>(plan: &Plan, y: &State<T>, j: usize, k: usize) -> Vector3<T> {
-    y.r + y.rot * v3::<T>(&plan.cables[j].hole_local[k + 1])
+    y.r + mat_vec_f64(&y.rot, &plan.cables[j].hole_local[k + 1])
 }
 
 /// `f64` pass reaching guide `g`: move the assumed next holes rigidly with the disk
@@ -59,22 +61,25 @@ pub(super) fn transport_next<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &Sta
     let n = buf.x.len();
     let w = n + buf.theta.len();
     let za = &buf.z_anchor[g];
-    let predict = buf.dnext_valid && za.len() == w;
+    let predict = buf.dnext_valid && za.len() == w && buf.dz.len() >= w;
+    if predict {
+        // the change of the outer unknowns since the last settle, once per guide
+        let (dx, dt) = buf.dz[..w].split_at_mut(n);
+        for ((d, x), a) in dx.iter_mut().zip(&buf.x).zip(&za[..n]) {
+            *d = x.re() - a;
+        }
+        for ((d, t), a) in dt.iter_mut().zip(&buf.theta).zip(&za[n..]) {
+            *d = t.re() - a;
+        }
+    }
+    let (d, dz) = (&buf.dnext[g], &buf.dz[..w.min(buf.dz.len())]);
     for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
         let q = &mut buf.next[j][k];
         let mut local = rota.transpose() * (*q - ra);
         if predict {
-            let d = &buf.dnext[g];
-            for a in 0..3 {
-                let row = &d[(3 * i + a) * w..(3 * i + a + 1) * w];
-                let mut dq = 0.0;
-                for c in 0..n {
-                    dq += row[c] * (buf.x[c].re() - za[c]);
-                }
-                for c in n..w {
-                    dq += row[c] * (buf.theta[c - n].re() - za[c]);
-                }
-                local[a] += dq;
+            let rows = d[3 * i * w..(3 * i + 3) * w].chunks_exact(w);
+            for (l, row) in local.iter_mut().zip(rows) {
+                *l += row.iter().zip(dz).map(|(a, b)| a * b).sum::<f64>();
             }
         }
         *q = r + rot * local;
@@ -147,13 +152,12 @@ pub(super) fn store_dnext<T: Real>(
         return;
     }
     let width = nout.min(sw - c0);
-    let rt = yg.rot.transpose();
     let d = &mut buf.dnext[g];
     if d.len() < 3 * plan.pending[g].len() * w {
         return;
     }
     for (i, &(j, k)) in plan.pending[g].iter().enumerate() {
-        let local = rt * (next_hole(plan, y, j, k) - yg.r);
+        let local = mat_t_vec(&yg.rot, &(next_hole(plan, y, j, k) - yg.r));
         for a in 0..3 {
             let e = local[a].eps();
             let row = &mut d[(3 * i + a) * w..(3 * i + a + 1) * w];
@@ -193,79 +197,68 @@ pub(super) fn settle_segment<T: Real>(
     let stagnated = worst <= floor * plan.length && worst > 0.5 * ck.last_error;
     if worst <= buf.local_tol * plan.length || stagnated {
         if ck.iterations > 1 && buf.mlin_valid {
-            // keep the Broyden-improved M for the next pass (rows between sweeps
-            // otherwise start every segment from the last sweep's stale M)
-            let h = &buf.settle_h[..l * l];
-            buf.mlin[ck.g][..l * l].copy_from_slice(h);
+            // keep the Broyden-improved H for the next pass (rows between sweeps
+            // otherwise start every segment from the last sweep's stale M): its
+            // terms, when there are at most KEPT_TERMS (else the sweep's M again)
+            let n = buf.settle_n;
+            let keep = if n <= KEPT_TERMS { n } else { 0 };
+            let (ku, kv) = lowrank::kept_mut(&mut buf.mlin[ck.g], l);
+            ku[..keep * l].copy_from_slice(&buf.settle_u[..keep * l]);
+            kv[..keep * l].copy_from_slice(&buf.settle_v[..keep * l]);
+            buf.mlin_terms[ck.g] = keep;
         }
         return true;
     }
     ck.last_error = worst;
-    // H approximates -(dg/dq)^-1 for g(q) = p(q) - q: the sweep's (I - A)^-1, or I
-    // (the plain fixed point) before any sweep, improved by Broyden's inverse update
-    // from the last attempt's secant (dg dq: observed change of g over step dq),
+    // H approximates -(dg/dq)^-1 for g(q) = p(q) - q: the sweep's (I - A)^-1 = I + C K
+    // with the terms kept from the last settle, or I (the plain fixed point) before
+    // any sweep, improved by Broyden's inverse update from the last attempt's secant
+    // (dg dq: observed change of g over step dq),
     // H <- H - (dq + H dg) dg^T / (dg^T dg), so a stale M or strong coupling near
-    // doubling back still converges superlinearly. The first step uses the sweep's
-    // M (or I) in place; H is a copy only once a Broyden update needs one (most
-    // segments settle after one step; with 27 hole coordinates the copy was a
-    // 729-value copy per disk).
+    // doubling back still converges superlinearly. H is kept in low-rank form
+    // (`lowrank`): each update appends the term u = -(dq + H dg) / (dg^T dg), v = dg.
+    let mut step = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
+    let g = ck.g;
+    let base = buf.mlin_valid.then(|| lowrank::base(&buf.mlin[g], l));
     if ck.iterations == 0 {
-        let m = &buf.mlin[ck.g];
-        for (i, &(j, k)) in pend.iter().enumerate() {
-            for a in 0..3 {
-                let r = 3 * i + a;
-                let step = if buf.mlin_valid {
-                    (0..l).map(|c| m[r * l + c] * err[c]).sum()
-                } else {
-                    err[r]
-                };
-                buf.prev_step[r] = step;
-                buf.prev_err[r] = err[r];
-                buf.next[j][k][a] += step;
-            }
+        let (ku, kv) = lowrank::kept(&buf.mlin[g], l);
+        let kt = if buf.mlin_valid { buf.mlin_terms[g] } else { 0 };
+        lowrank::apply(base, l, ku, kv, kt, &err, &mut step);
+    } else {
+        if ck.iterations == 1 {
+            // the working terms start as the kept ones
+            let kt = if buf.mlin_valid { buf.mlin_terms[g] } else { 0 };
+            let (ku, kv) = lowrank::kept(&buf.mlin[g], l);
+            buf.settle_u[..kt * l].copy_from_slice(&ku[..kt * l]);
+            buf.settle_v[..kt * l].copy_from_slice(&kv[..kt * l]);
+            buf.settle_n = kt;
         }
-        ck.iterations += 1;
-        return false;
-    }
-    let h = &mut buf.settle_h[..l * l];
-    if ck.iterations == 1 {
-        for r in 0..l {
-            for c in 0..l {
-                h[r * l + c] = if buf.mlin_valid {
-                    buf.mlin[ck.g][r * l + c]
-                } else if r == c {
-                    1.0
-                } else {
-                    0.0
-                };
-            }
-        }
-    }
-    {
-        // Broyden's inverse update from the last step
         let mut dg = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
         let mut dd = 0.0;
         for r in 0..l {
             dg[r] = err[r] - buf.prev_err[r];
             dd += dg[r] * dg[r];
         }
-        if dd > 0.0 {
+        let n = buf.settle_n;
+        if dd > 0.0 && (n + 1) * l <= buf.settle_u.len() {
+            let mut hdg = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
+            let (su, sv) = (&buf.settle_u, &buf.settle_v);
+            lowrank::apply(base, l, su, sv, n, &dg, &mut hdg);
             for r in 0..l {
-                let hdg: f64 = (0..l).map(|c| h[r * l + c] * dg[c]).sum();
-                let u = (buf.prev_step[r] + hdg) / dd;
-                for (hc, dgc) in h[r * l..(r + 1) * l].iter_mut().zip(&dg[..l]) {
-                    *hc -= u * dgc;
-                }
+                buf.settle_u[n * l + r] = -(buf.prev_step[r] + hdg[r]) / dd;
+                buf.settle_v[n * l + r] = dg[r];
             }
+            buf.settle_n = n + 1;
         }
+        let (su, sv) = (&buf.settle_u, &buf.settle_v);
+        lowrank::apply(base, l, su, sv, buf.settle_n, &err, &mut step);
     }
     for (i, &(j, k)) in pend.iter().enumerate() {
         for a in 0..3 {
             let r = 3 * i + a;
-            let step: f64 = (0..l).map(|c| h[r * l + c] * err[c]).sum();
-            buf.prev_step[r] = step;
+            buf.prev_step[r] = step[r];
             buf.prev_err[r] = err[r];
-            buf.next[j][k][a] += step;
+            buf.next[j][k][a] += step[r];
         }
     }
     ck.iterations += 1;
@@ -339,32 +332,30 @@ pub(super) fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut S
         for a in 0..3 {
             let q = 3 * i + a;
             let e = p[a].eps();
-            cmat[q * JUMP_DIRS..(q + 1) * JUMP_DIRS].copy_from_slice(&e[nout..]);
+            let (eo, ec) = e.split_at(nout);
+            cmat[q * JUMP_DIRS..(q + 1) * JUMP_DIRS].copy_from_slice(ec);
             for r in 0..JUMP_DIRS {
                 let b = buf.jump_b[r * l + q];
                 if b != 0.0 {
-                    for (o, eo) in e[..nout].iter().enumerate() {
-                        rhs[r * w + o] += b * eo;
-                    }
-                    for (c, ec) in e[nout..].iter().enumerate() {
-                        s[r * JUMP_DIRS + c] -= b * ec;
-                    }
+                    let row = &mut rhs[r * w..r * w + nout];
+                    row.iter_mut().zip(eo).for_each(|(v, x)| *v += b * x);
+                    let srow = &mut s[r * JUMP_DIRS..(r + 1) * JUMP_DIRS];
+                    srow.iter_mut().zip(ec).for_each(|(v, x)| *v -= b * x);
                 }
             }
         }
     }
     let solved = solve_small(s, JUMP_DIRS, rhs, w);
     if solved {
-        // M = I + C K with K = (I - B C)^-1 B (the last l columns of rhs)
+        // M = I + C K with K = (I - B C)^-1 B (the last l columns of rhs), stored as
+        // its factors (`lowrank`)
         let m = &mut buf.mlin[g];
-        for r in 0..l {
-            for c in 0..l {
-                let ck: f64 = (0..JUMP_DIRS)
-                    .map(|t| cmat[r * JUMP_DIRS + t] * rhs[t * w + nout + c])
-                    .sum();
-                m[r * l + c] = if r == c { 1.0 } else { 0.0 } + ck;
-            }
+        let (cs, ks) = m[..2 * JUMP_DIRS * l].split_at_mut(JUMP_DIRS * l);
+        cs.copy_from_slice(&cmat[..JUMP_DIRS * l]);
+        for (t, row) in ks.chunks_exact_mut(l).enumerate() {
+            row.copy_from_slice(&rhs[t * w + nout..t * w + nout + l]);
         }
+        buf.mlin_terms[g] = 0;
     }
     // the segment's state map d y / d j, before the fold (see `seg_map`)
     if let Some(map) = buf
@@ -385,15 +376,13 @@ pub(super) fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut S
     // search tolerates that) and drops M
     buf.mlin_valid = solved;
     let fold = |z: &mut T| {
-        let e = z.eps_mut();
-        for c in 0..JUMP_DIRS {
-            let lc = e[nout + c];
-            if lc != 0.0 && solved {
-                for o in 0..nout {
-                    e[o] += lc * rhs[c * w + o];
-                }
+        let (eo, ec) = z.eps_mut().split_at_mut(nout);
+        for (c, lc) in ec[..JUMP_DIRS].iter_mut().enumerate() {
+            if *lc != 0.0 && solved {
+                let row = &rhs[c * w..c * w + nout];
+                eo.iter_mut().zip(row).for_each(|(v, r)| *v += *lc * r);
             }
-            e[nout + c] = 0.0;
+            *lc = 0.0;
         }
     };
     y.r.iter_mut().for_each(fold);

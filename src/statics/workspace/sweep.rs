@@ -167,6 +167,7 @@ fn wide_sweeps<const N: usize>(
     }
     if ok && b.mlin_valid {
         b64.mlin.clone_from(&b.mlin);
+        b64.mlin_terms.clone_from(&b.mlin_terms);
         b64.mlin_valid = true;
         b64.seg_map.clone_from(&b.seg_map);
         b64.seg_map_valid = true;
