@@ -768,9 +768,10 @@ fn displacement_driven_continuous_tendons_solve_from_readings() {
 /// extrapolated next holes (`pass::local_next`) keep the local iteration short, and
 /// its small steps are carried to the segment's end through the sweep's state map
 /// (`pass::condensed::linear_retry`) instead of re-integrating the gap: at most 0.3
-/// re-integrations per disk gap per solve on average (0.098 measured; 1.54 with every
+/// re-integrations per disk gap per solve on average (0.101 measured; 1.54 with every
 /// local step re-integrated; without the extrapolated holes the first pass of each
-/// step starts 1e-9..1e-6 L off: 3.51 here).
+/// step starts 1e-9..1e-6 L off: 3.51 here; 0.305 when the predictor's history kept
+/// chord-refined unknowns without moving their holes along, `refine_local_next`).
 #[test]
 fn warm_ramp_on_disks_matches_cold_with_few_local_iterations() {
     let sc = till();

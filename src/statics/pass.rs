@@ -21,7 +21,7 @@ use crate::math::{mat_vec_f64, Real};
 use condensed::{
     fold_segment, jump_block, linear_retry, seed_jump, settle_segment, store_dnext, transport_next,
 };
-pub(crate) use condensed::{local_next, local_next_len, set_local_next};
+pub(crate) use condensed::{local_next, local_next_len, refine_local_next, set_local_next};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use small::det_small;
@@ -110,6 +110,8 @@ pub(crate) struct PassBuf<T: Real> {
     settle_u: Vec<f64>,
     settle_v: Vec<f64>,
     settle_n: usize,
+    /// Local iteration scratch: error, step, secant and `H` times secant (`4 L`).
+    settle_tmp: Vec<f64>,
     prev_err: Vec<f64>,
     prev_step: Vec<f64>,
     /// Condensed coupling: pose of each guide when its `next` holes were last
@@ -194,6 +196,7 @@ impl<T: Real> PassBuf<T> {
             settle_u: vec![0.0; SETTLE_TERMS * plan.max_pending_dirs],
             settle_v: vec![0.0; SETTLE_TERMS * plan.max_pending_dirs],
             settle_n: 0,
+            settle_tmp: vec![0.0; 4 * plan.max_pending_dirs],
             prev_err: vec![0.0; plan.max_pending_dirs],
             prev_step: vec![0.0; plan.max_pending_dirs],
             watch: false,

@@ -60,6 +60,21 @@ mod sweep;
 use sweep::{sweep, Wide};
 
 mod broyden;
+/// Largest chord step (scaled unknowns) that refines a solution for the load-path
+/// predictor's history (`predict.rs`): the step from a converged residual is about
+/// the tolerance; a larger one means a stale or ill-conditioned Jacobian, and the
+/// solution is kept as it is.
+const REFINE_MAX_STEP: f64 = 1e-6;
+/// Only a solution whose residual is above this fraction of the tolerance is refined:
+/// below it the cubic's eightfold amplification stays under the tolerance anyway, and
+/// the chord step from such a residual is mostly round-off. Why not always: with the
+/// condensed coupling a pass's residual depends on where its next holes start by up to
+/// ~2e-10 near the end of the documented region (`tests/stability.rs`, tension
+/// intensity 6.08: the same unknowns evaluated 4.7e-11 and 2.5e-10), and refining every
+/// solution there moved a warm step's start into that noise, where Newton's line
+/// search stalled (`Stalled` at 2.5e-10); at 0.1 the step converges and Till's 100-disk
+/// ramp keeps its gain (0.14 Newton iterations a solve, 0.12 refining every solution).
+const REFINE_FROM: f64 = 0.1;
 use broyden::Broyden;
 
 mod predict;
@@ -435,9 +450,28 @@ impl Workspace {
         if self.has_solution {
             super::pass::local_next(&self.plan, &self.b64, &mut self.holes_aux);
         }
+        // the point the predictor extrapolates from: the solution with one more
+        // chord step, no pass (`predict.rs`, "refined solutions")
+        self.x_trial.copy_from_slice(&self.x);
+        if self.has_solution
+            && predict
+            && self.lu_valid
+            && max_abs(&self.res) > REFINE_FROM * self.tol
+        {
+            self.broyden.sync(&self.lu);
+            self.broyden.step(&self.res, &mut self.dx);
+            if self.dx.iter().all(|d| d.abs() <= REFINE_MAX_STEP) {
+                for (x, d) in self.x_trial.iter_mut().zip(&self.dx) {
+                    *x += d;
+                }
+                let (plan, b64) = (&self.plan, &self.b64);
+                super::pass::refine_local_next(plan, b64, &self.dx, &mut self.holes_aux);
+            }
+        }
         self.secant.finish(
             self.has_solution,
             &self.x,
+            &self.x_trial,
             &self.holes_aux,
             &self.loads,
             &self.b64.theta,

@@ -115,6 +115,33 @@ pub(crate) fn local_next(plan: &Plan, buf: &PassBuf<f64>, out: &mut [f64]) {
     }
 }
 
+/// Condensed coupling: move the next holes `local` (as [`local_next`] writes them,
+/// settled at the unknowns `x`) to first order to the unknowns `x + dx`, with the
+/// last sweep's `D = d q_local / d x` (`dnext`); unchanged without a valid sweep.
+/// The load-path predictor keeps solutions refined by a chord step (`dx`) and their
+/// holes must follow them: holes 1e-11 L off the refined unknowns cost a gap
+/// re-integration each where a 1e-13 L step is carried linearly
+/// (`tests/continuous_routing.rs`, 40 disks: 0.098 -> 0.305 re-integrations a gap
+/// without this).
+pub(crate) fn refine_local_next(plan: &Plan, buf: &PassBuf<f64>, dx: &[f64], local: &mut [f64]) {
+    let n = buf.x.len();
+    let w = n + buf.theta.len();
+    if !plan.condensed || !buf.dnext_valid || dx.len() != n {
+        return;
+    }
+    let mut o = 0;
+    for (g, pend) in plan.pending.iter().enumerate() {
+        let d = &buf.dnext[g];
+        if d.len() < 3 * pend.len() * w {
+            return;
+        }
+        for row in d.chunks_exact(w).take(3 * pend.len()) {
+            local[o] += row[..n].iter().zip(dx).map(|(a, b)| a * b).sum::<f64>();
+            o += 1;
+        }
+    }
+}
+
 /// Condensed coupling: adopt predicted next holes `local` (as [`local_next`] writes
 /// them) for unknowns `z = [x; theta]`: the next pass carries them along with each
 /// guide's pose and predicts from `z` on (see `transport_next`).
@@ -177,7 +204,8 @@ pub(super) fn settle_segment<T: Real>(
 ) -> bool {
     let pend = &plan.pending[ck.g];
     let l = 3 * pend.len();
-    let mut err = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
+    // scratch in the buffer, not stack arrays (their zeroing was a memset per call)
+    let err = &mut buf.settle_tmp[..l];
     let mut worst = 0.0f64;
     for (i, &(j, k)) in pend.iter().enumerate() {
         let p = next_hole(plan, y, j, k).map(|x| x.re());
@@ -217,13 +245,15 @@ pub(super) fn settle_segment<T: Real>(
     // H <- H - (dq + H dg) dg^T / (dg^T dg), so a stale M or strong coupling near
     // doubling back still converges superlinearly. H is kept in low-rank form
     // (`lowrank`): each update appends the term u = -(dq + H dg) / (dg^T dg), v = dg.
-    let mut step = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
+    let (err, rest) = buf.settle_tmp.split_at_mut(l);
+    let (step, rest) = rest.split_at_mut(l);
+    let (dg, hdg) = rest.split_at_mut(l);
     let g = ck.g;
     let base = buf.mlin_valid.then(|| lowrank::base(&buf.mlin[g], l));
     if ck.iterations == 0 {
         let (ku, kv) = lowrank::kept(&buf.mlin[g], l);
         let kt = if buf.mlin_valid { buf.mlin_terms[g] } else { 0 };
-        lowrank::apply(base, l, ku, kv, kt, &err, &mut step);
+        lowrank::apply(base, l, ku, kv, kt, err, step);
     } else {
         if ck.iterations == 1 {
             // the working terms start as the kept ones
@@ -233,7 +263,6 @@ pub(super) fn settle_segment<T: Real>(
             buf.settle_v[..kt * l].copy_from_slice(&kv[..kt * l]);
             buf.settle_n = kt;
         }
-        let mut dg = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
         let mut dd = 0.0;
         for r in 0..l {
             dg[r] = err[r] - buf.prev_err[r];
@@ -241,9 +270,8 @@ pub(super) fn settle_segment<T: Real>(
         }
         let n = buf.settle_n;
         if dd > 0.0 && (n + 1) * l <= buf.settle_u.len() {
-            let mut hdg = [0.0; 3 * crate::statics::plan::MAX_CONDENSED_CABLES];
             let (su, sv) = (&buf.settle_u, &buf.settle_v);
-            lowrank::apply(base, l, su, sv, n, &dg, &mut hdg);
+            lowrank::apply(base, l, su, sv, n, dg, hdg);
             for r in 0..l {
                 buf.settle_u[n * l + r] = -(buf.prev_step[r] + hdg[r]) / dd;
                 buf.settle_v[n * l + r] = dg[r];
@@ -251,7 +279,7 @@ pub(super) fn settle_segment<T: Real>(
             buf.settle_n = n + 1;
         }
         let (su, sv) = (&buf.settle_u, &buf.settle_v);
-        lowrank::apply(base, l, su, sv, buf.settle_n, &err, &mut step);
+        lowrank::apply(base, l, su, sv, buf.settle_n, err, step);
     }
     for (i, &(j, k)) in pend.iter().enumerate() {
         for a in 0..3 {

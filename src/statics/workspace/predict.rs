@@ -19,6 +19,18 @@
 //! step starts its local iterations 1e-13 L away instead of 1e-9..1e-6 L (Till's robot
 //! on 100 disks: 1.5 -> 0.5 gap re-integrations a gap, `examples/till_ramp_profile.rs`).
 //!
+//! Refined solutions: a solve stops once its residual is below the tolerance, so a
+//! kept solution is off by up to a tolerance's worth, and the cubic's weights
+//! (4, -6, 4, -1) amplify that about eightfold: on Till's robot with 100 disks the
+//! predicted start's residual was 1-4 tolerances (median 2e-10 against 1e-10), so
+//! 85 % of the ramp's solves needed a Newton step after it, and a solve that did not
+//! (residual just below the tolerance) poisoned the next prediction. The history
+//! therefore keeps each solution moved by one more chord step `-H r` (the solve's
+//! last inverse Jacobian with its Broyden updates; a small linear solve, no pass),
+//! whose residual is that of a Newton step from it; the solve still hands back and
+//! reports the point it evaluated. Measured in `examples/till_ramp_profile.rs` (see
+//! `benches/README.md`, session 12).
+//!
 //! It is used only when the unknowns are exactly the last solution (nothing moved
 //! them since, e.g. [`super::Workspace::set_theta_predicted`]'s own predictor) and the
 //! previous solve started warm from the solution before. Buffers are sized once
@@ -37,6 +49,10 @@ const PARALLEL_TOL: f64 = 1e-6;
 /// One solution of the path: unknowns, loads and load parameters.
 #[derive(Clone, Debug)]
 struct Point {
+    /// The solution as the solve handed it back (a warm start from it is recognised
+    /// by these values) ...
+    x_ret: Vec<f64>,
+    /// ... and as the extrapolation uses it (refined, see the module docs).
     x: Vec<f64>,
     /// Auxiliary values extrapolated with `x` (see the module docs).
     aux: Vec<f64>,
@@ -48,6 +64,7 @@ struct Point {
 impl Point {
     fn new(n: usize, naux: usize) -> Self {
         Self {
+            x_ret: vec![0.0; n],
             x: vec![0.0; n],
             aux: vec![0.0; naux],
             loads: Loads::none(),
@@ -100,7 +117,7 @@ impl Secant {
         theta: &[f64],
         predict: bool,
     ) -> bool {
-        self.from_sol = self.pts[0].valid && self.pts[0].x == x;
+        self.from_sol = self.pts[0].valid && self.pts[0].x_ret == x;
         // the latest solution is consumed: it is noted again if this solve converges
         self.pts[0].valid = false;
         if !(predict && self.from_sol && self.pts[1].valid) {
@@ -143,11 +160,13 @@ impl Secant {
     }
 
     /// End of a solve: `x` solves `loads`, `theta` when `converged` (`aux`: its
-    /// auxiliary values).
+    /// auxiliary values); `x_hist` is the same solution refined by a chord step (or
+    /// `x` itself), which the extrapolation uses.
     pub fn finish(
         &mut self,
         converged: bool,
         x: &[f64],
+        x_hist: &[f64],
         aux: &[f64],
         loads: &Loads,
         theta: &[f64],
@@ -166,7 +185,8 @@ impl Secant {
         }
         self.from_sol = false;
         let sol = &mut self.pts[0];
-        sol.x.copy_from_slice(x);
+        sol.x_ret.copy_from_slice(x);
+        sol.x.copy_from_slice(x_hist);
         sol.aux.copy_from_slice(aux);
         copy_loads(&mut sol.loads, loads);
         sol.theta.clear();
@@ -270,7 +290,7 @@ mod tests {
                     "{k} {x:?} {e:?}"
                 );
             }
-            s.finish(true, &xs(t), &[], &loads(t), &[]);
+            s.finish(true, &xs(t), &xs(t), &[], &loads(t), &[]);
         }
     }
 
@@ -282,14 +302,14 @@ mod tests {
         let mut s = Secant::new(2, 0);
         let mut x = xs(1.0);
         assert!(!s.start(&mut x, &mut [], &loads(1.0), &[], true));
-        s.finish(true, &x, &[], &loads(1.0), &[]);
+        s.finish(true, &x, &x, &[], &loads(1.0), &[]);
         let mut x = xs(1.0);
         assert!(
             !s.start(&mut x, &mut [], &loads(1.5), &[], true),
             "one point only"
         );
         let x = xs(1.5);
-        s.finish(true, &x, &[], &loads(1.5), &[]);
+        s.finish(true, &x, &x, &[], &loads(1.5), &[]);
         let mut x = xs(1.5);
         assert!(s.start(&mut x, &mut [], &loads(1.2), &[], true));
         let e = xs(1.2);
@@ -297,7 +317,7 @@ mod tests {
             (x[0] - e[0]).abs() < 1e-15 && (x[1] - e[1]).abs() < 1e-15,
             "{x:?}"
         );
-        s.finish(true, &e, &[], &loads(1.2), &[]);
+        s.finish(true, &e, &e, &[], &loads(1.2), &[]);
         // a second cable's tension: not along the last step
         let mut x = e;
         let mut turn = loads(1.2);
@@ -305,7 +325,7 @@ mod tests {
         assert!(!s.start(&mut x, &mut [], &turn, &[], true));
         assert_eq!(x, e);
         // unknowns moved since the solve (another predictor): left alone
-        s.finish(true, &e, &[], &loads(1.2), &[]);
+        s.finish(true, &e, &e, &[], &loads(1.2), &[]);
         let mut x = [e[0] + 1e-3, e[1]];
         assert!(!s.start(&mut x, &mut [], &loads(1.0), &[], true));
     }
