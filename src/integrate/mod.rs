@@ -31,15 +31,7 @@ impl<T: Real> State<T> {
     #[inline(always)]
     pub fn add_scaled(&self, k: &State<T>, h: f64) -> State<T> {
         let mut out = *self;
-        let axpy = |o: &mut [T], k: &[T]| {
-            for (oi, ki) in o.iter_mut().zip(k) {
-                *oi += ki.scale(h);
-            }
-        };
-        axpy(out.r.as_mut_slice(), k.r.as_slice());
-        axpy(out.rot.as_mut_slice(), k.rot.as_slice());
-        axpy(out.n.as_mut_slice(), k.n.as_slice());
-        axpy(out.m.as_mut_slice(), k.m.as_slice());
+        out.axpy(k, h);
         out
     }
     /// `self += h k` in place (the same arithmetic as [`State::add_scaled`]).
