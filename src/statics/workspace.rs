@@ -345,9 +345,23 @@ impl Workspace {
         &self.b64.theta
     }
 
-    /// Replace the settings (rebuilds the plan; allocates).
+    /// Replace the settings (rebuilds the plan; allocates). The load parameters and
+    /// their values `theta` are kept, as in [`Workspace::set_loads`]: a workspace
+    /// owned by a [`crate::tendons::TendonWorkspace`] carries the tensions there, and
+    /// dropping them made its next solve panic on a length mismatch (found in
+    /// session 14 by changing the tolerance of the FTDCR v4 scene's workspace). The
+    /// unknowns are kept too when their number is unchanged, as a starting point for
+    /// [`Workspace::adopt_unknowns`] callers; the workspace holds no solution (a
+    /// `Start::Warm` solve starts cold).
     pub fn set_settings(&mut self, settings: SolverSettings) -> Result<(), ModelError> {
-        *self = Self::new(self.robot.clone(), self.loads.clone(), settings)?;
+        let theta = self.b64.theta.clone();
+        let params = self.plan.params.clone();
+        let x = std::mem::take(&mut self.x);
+        *self = Self::with_params(self.robot.clone(), self.loads.clone(), settings, &params)?;
+        self.set_theta(&theta);
+        if x.len() == self.x.len() {
+            self.x = x;
+        }
         Ok(())
     }
 
