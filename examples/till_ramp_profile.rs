@@ -1,6 +1,7 @@
 //! Profile driver for `benches/continuous.rs` without criterion (issue 11): the warm
 //! tension ramp on Till's robot, continuous (`cont`) or as 100 point disks (`disks`),
 //! for callgrind and deterministic counts (RHS evaluations, Newton iterations per solve).
+//! Each line: solve index, tip (m), Newton iterations, RHS evaluations, Jacobians.
 //! `cargo run --release --example till_ramp_profile -- MODE SOLVES [q]`: prints each
 //! solve's tip (m) unless `q`, and the counts on stderr.
 
@@ -77,7 +78,10 @@ fn main() {
         failed += usize::from(!rep.status.is_converged());
         if !quiet {
             let t = ws.tip_position();
-            println!("{k} {:.17e} {:.17e} {:.17e}", t.x, t.y, t.z);
+            println!(
+                "{k} {:.17e} {:.17e} {:.17e} it {} rhs {} jac {}",
+                t.x, t.y, t.z, rep.iterations, rep.rhs_evals, rep.jacobian_evals
+            );
         }
     }
     let r = reps as f64;
