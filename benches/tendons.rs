@@ -8,7 +8,10 @@
 //!   One iteration = one row. Issue target: <= 100 us.
 //! * `tendon_readings_cold`: one row solved with `Start::Cold` (the joint path from
 //!   the reference equilibrium at zero readings and the pretensions, else the nested
-//!   method from the straight rod). Issue target: <= 2 ms.
+//!   method from the straight rod). Issue target: <= 2 ms. The same row is solved
+//!   cold again and again: from the second time on, its first Jacobian is the one
+//!   kept from the first cold solve at the reference (`tendons/solve/joint/
+//!   reference.rs`), as for any cold row after the first.
 //! * `tendon_track_row`: a warm row plus its JSON record (what `track` does per row,
 //!   without the write). Issue target: <= 150 us.
 //! * `tendon_control_tick_1khz`: the control-loop case of a servo controller at

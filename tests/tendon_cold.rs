@@ -5,8 +5,12 @@
 //! - a cold solve reaches the equilibrium the warm chain reaches (every 20th row of
 //!   the FTDCR v4 val recording: tip within 1e-9 m, same taut flags);
 //! - it does not depend on earlier rows: the same row solved cold after two
-//!   different rows gives the same tip within 1e-12 m (the settled holes' starting
-//!   guesses differ, so round-off may);
+//!   different rows gives the same tip within 1e-11 m, the solver's tolerance band
+//!   (`tolerance_m` 1e-12 m on the tendon lengths): the settled holes' starting
+//!   guesses and the local iteration's matrix come from the previous solve's last
+//!   sweep, so the converged point may move within it. Measured: at most 3.0e-12 m
+//!   (1e-12 held while every cold solve swept at the reference; since session 14 the
+//!   sweep there is kept, see the last test);
 //! - the path from the reference is cheaper than the nested method alone
 //!   (`joint_newton = false`) on the same rows: fewer right-hand-side evaluations
 //!   (`f64` plus dual, a count, not a time).
@@ -37,6 +41,7 @@ fn cold_from_the_reference_matches_the_warm_chain_and_forgets_history() {
     let rows = rows(&scene, &warm);
     assert!(rows.len() > 400, "{} rows", rows.len());
     let (mut work_cold, mut work_nested) = (0, 0);
+    let mut h_max = 0.0f64;
     let work = |ws: &cablesense::tendons::TendonWorkspace| {
         let c = ws.workspace().rhs_counts();
         c.f64_rhs + c.dual_rhs
@@ -68,8 +73,9 @@ fn cold_from_the_reference_matches_the_warm_chain_and_forgets_history() {
             .expect("valid row");
         assert!(again.status.is_converged());
         let h = (cold.tip_position() - tip).norm();
+        h_max = h_max.max(h);
         assert!(
-            h <= 1e-12,
+            h <= 1e-11,
             "row {i}: cold solve moved {h:.3e} m with history"
         );
         if i % 60 == 7 {
@@ -84,9 +90,66 @@ fn cold_from_the_reference_matches_the_warm_chain_and_forgets_history() {
             work_cold += w_row;
         }
     }
-    eprintln!("cold solves on every 60th row: {work_cold} RHS, nested method alone {work_nested}");
+    eprintln!("cold solves on every 60th row: {work_cold} RHS, nested method alone {work_nested}; largest move with history {h_max:.3e} m");
     assert!(
         work_cold < work_nested,
         "cold {work_cold} vs nested {work_nested} RHS"
     );
+}
+
+/// The first cold solve keeps its sweep at the reference equilibrium and later cold
+/// solves start from it (`tendons/solve/joint/reference.rs`): a cold row solved again
+/// takes fewer dual right-hand sides than the first time (a count: one sweep fewer)
+/// and lands on the same tip (1e-11 m). After the model changes (the inner
+/// workspace's integrator refined through `workspace_mut`), the kept Jacobian no
+/// longer matches the reference's evaluation and a cold row equals that of a
+/// workspace built with the new settings (1e-9 m).
+#[test]
+fn cold_rows_reuse_the_reference_jacobian_only_for_the_same_model() {
+    let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let mut ws = scene.tendon_workspace().expect("workspace");
+    let rows = rows(&scene, &ws);
+    let row = &rows[146].readings_m;
+    let dual = |ws: &cablesense::tendons::TendonWorkspace| ws.workspace().rhs_counts().dual_rhs;
+    let d0 = dual(&ws);
+    let first = ws.solve_readings_from(row, Start::Cold).expect("valid row");
+    let d1 = dual(&ws);
+    assert!(first.status.is_converged(), "{first:?}");
+    let tip = ws.tip_position();
+    let again = ws.solve_readings_from(row, Start::Cold).expect("valid row");
+    let d2 = dual(&ws);
+    assert!(again.status.is_converged(), "{again:?}");
+    assert!(
+        d2 - d1 < d1 - d0,
+        "dual RHS: first cold solve {}, second {}",
+        d1 - d0,
+        d2 - d1
+    );
+    let d = (ws.tip_position() - tip).norm();
+    assert!(d <= 1e-11, "tip moved {d:.3e} m");
+    // another model: RK4 with 20 steps per section instead of 10
+    let mut settings = ws.workspace().settings().clone();
+    settings.integrator = cablesense::Integrator::Rk4 {
+        steps_per_section: 20,
+    };
+    ws.workspace_mut()
+        .set_settings(settings.clone())
+        .expect("valid settings");
+    let mut fresh = scene.tendon_workspace().expect("workspace");
+    fresh
+        .workspace_mut()
+        .set_settings(settings)
+        .expect("valid settings");
+    for r in [&rows[146].readings_m, &rows[300].readings_m] {
+        let a = ws.solve_readings_from(r, Start::Cold).expect("valid row");
+        let b = fresh
+            .solve_readings_from(r, Start::Cold)
+            .expect("valid row");
+        assert!(
+            a.status.is_converged() && b.status.is_converged(),
+            "{a:?} {b:?}"
+        );
+        let d = (ws.tip_position() - fresh.tip_position()).norm();
+        assert!(d <= 1e-9, "changed model: tips {d:.3e} m apart");
+    }
 }

@@ -472,6 +472,7 @@ impl TendonWorkspace {
             self.joint.free_prev.copy_from_slice(&self.free0);
             self.ws.adopt_unknowns(&self.x_ref, false);
             self.joint.forget_jacobian();
+            self.joint.rj.pending = true;
             if self.solve_joint() && self.refresh_factors() {
                 self.joint.at_solution = true;
                 return Ok(self.finish());

@@ -34,6 +34,8 @@ use crate::statics::{SolveStatus, LOCAL_TOL};
 // The row's start: the previous row's residual without a pass, and a predictor.
 mod predict;
 use predict::RowStart;
+// The cold start's first Jacobian, kept from the first cold solve.
+mod reference;
 
 /// Newton iterations of the joint path before it hands back.
 pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
@@ -144,6 +146,8 @@ pub(super) struct JointBufs {
     sw_taut: Vec<bool>,
     sw_dz: Vec<f64>,
     sw_f: Vec<f64>,
+    /// The Jacobian at the reference equilibrium (`reference` submodule).
+    pub(super) rj: reference::RefJacobian,
 }
 
 impl JointBufs {
@@ -194,6 +198,7 @@ impl JointBufs {
             sw_taut: vec![true; p],
             sw_dz: vec![0.0; n + p],
             sw_f: vec![0.0; n + p],
+            rj: reference::RefJacobian::default(),
         }
     }
 }
@@ -307,6 +312,7 @@ impl TendonWorkspace {
         let Some(mut merit) = evaluated.or_else(|| self.joint_evaluate()) else {
             return Err(first_step);
         };
+        self.ref_check();
         for it in 0..JOINT_MAX_ITERATIONS {
             self.report.iterations = it;
             if merit <= merit_tol {
@@ -364,7 +370,7 @@ impl TendonWorkspace {
                         return Err(first_step);
                     }
                 }
-                if fresh && !self.joint_factor() {
+                if fresh && !self.joint_fresh_jacobian() {
                     return Err(first_step);
                 }
                 self.joint_step(n, p);
@@ -460,6 +466,7 @@ impl TendonWorkspace {
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
     /// `max(|r|/tol, |G|/tol_G)` (converged at <= 1), `None` if the pass failed.
     fn joint_evaluate(&mut self) -> Option<f64> {
+        self.ref_leave();
         let p = self.driven.len();
         self.theta[..p].copy_from_slice(&self.t);
         self.ws.set_theta(&self.theta);
