@@ -11,6 +11,7 @@
 //!   sweep, so the converged point may move within it. Measured: at most 3.0e-12 m
 //!   (1e-12 held while every cold solve swept at the reference; since session 14 the
 //!   sweep there is kept, see the last test);
+//! - the solver settings of the inner workspace may change between rows (last test);
 //! - the path from the reference is cheaper than the nested method alone
 //!   (`joint_newton = false`) on the same rows: fewer right-hand-side evaluations
 //!   (`f64` plus dual, a count, not a time).
@@ -151,5 +152,45 @@ fn cold_rows_reuse_the_reference_jacobian_only_for_the_same_model() {
         );
         let d = (ws.tip_position() - fresh.tip_position()).norm();
         assert!(d <= 1e-9, "changed model: tips {d:.3e} m apart");
+    }
+}
+
+/// Changing the solver settings of a tendon workspace's inner shooting workspace
+/// between rows (`TendonWorkspace::workspace_mut().set_settings`). Before session 14,
+/// `Workspace::set_settings` rebuilt the workspace without its load parameters (the
+/// tendons' tensions), and the next solve from readings panicked on a slice length
+/// mismatch. What must hold: every row after the change converges, and its tip equals
+/// that of a workspace built with the new settings from the start (within 1e-9 m, the
+/// scale of the solver tolerance on this 0.19 m robot).
+#[test]
+fn settings_changed_between_rows_keep_the_tensions() {
+    let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let mut ws = scene.tendon_workspace().expect("workspace");
+    let rows = rows(&scene, &ws);
+    let mut changed = ws.workspace().settings().clone();
+    changed.tolerance = 1e-8;
+    let mut reference = scene.tendon_workspace().expect("workspace");
+    reference
+        .workspace_mut()
+        .set_settings(changed.clone())
+        .expect("valid settings");
+    let theta_len = ws.workspace().theta().len();
+    for (i, row) in rows.iter().take(40).enumerate() {
+        if i == 20 {
+            ws.workspace_mut()
+                .set_settings(changed.clone())
+                .expect("valid settings");
+            assert_eq!(ws.workspace().theta().len(), theta_len, "tensions dropped");
+        }
+        let r = ws.solve_readings(&row.readings_m).expect("valid row");
+        assert!(r.status.is_converged(), "row {i}: {r:?}");
+        let q = reference
+            .solve_readings(&row.readings_m)
+            .expect("valid row");
+        assert!(q.status.is_converged(), "reference row {i}: {q:?}");
+        if i >= 20 {
+            let d = (ws.tip_position() - reference.tip_position()).norm();
+            assert!(d <= 1e-9, "row {i}: tip {d:.3e} m from the reference");
+        }
     }
 }
