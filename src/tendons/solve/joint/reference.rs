@@ -21,7 +21,8 @@ use super::super::TendonWorkspace;
 
 /// Largest change of the scaled shooting residual at `x_ref`, in tolerances, for
 /// the kept Jacobian to count as the model's (settling the next holes from other
-/// starting guesses moves it by round-off, ~1e-3 tolerances).
+/// starting guesses moves it; how far was not measured, the margin is a guess: a
+/// miss only costs the sweep that would have run anyway).
 const RES_MATCH: f64 = 10.0;
 /// Largest change of a cable length at `x_ref` (m) for the same.
 const LEN_MATCH: f64 = 1e-12;
