@@ -38,11 +38,9 @@ pub(in crate::tendons::solve) struct RefJacobian {
     valid: bool,
     /// Set by the cold path: the next evaluation is at the reference.
     pub(in crate::tendons::solve) pending: bool,
-    /// The iterate is the reference and the kept Jacobian matches it.
-    here: bool,
-    /// The iterate is the reference and the kept Jacobian does not match: keep the
-    /// next sweep.
-    store: bool,
+    /// The iterate is the reference: `Some(true)` when the kept Jacobian matches
+    /// it, `Some(false)` when it does not (keep the next sweep); `None` elsewhere.
+    at_ref: Option<bool>,
 }
 
 impl TendonWorkspace {
@@ -57,20 +55,20 @@ impl TendonWorkspace {
         let close = |a: &[f64], b: &[f64], eps: f64| {
             a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= eps)
         };
-        rj.here = rj.valid
-            && rj.theta == self.theta
-            && close(&rj.res, self.ws.residual_vector(), RES_MATCH * tol)
-            && close(&rj.lengths, &self.lengths, LEN_MATCH);
-        rj.store = !rj.here;
+        rj.at_ref = Some(
+            rj.valid
+                && rj.theta == self.theta
+                && close(&rj.res, self.ws.residual_vector(), RES_MATCH * tol)
+                && close(&rj.lengths, &self.lengths, LEN_MATCH),
+        );
     }
 
     /// The Jacobian of a fresh step: the kept one at the reference when it matches,
     /// else a sweep (kept when it is the reference's). `false` when it is singular or
     /// the sweep failed.
     pub(super) fn joint_fresh_jacobian(&mut self) -> bool {
-        let rj = &mut self.joint.rj;
-        let (here, store) = (std::mem::take(&mut rj.here), std::mem::take(&mut rj.store));
-        if here {
+        let at_ref = self.joint.rj.at_ref.take();
+        if at_ref == Some(true) {
             let jb = &mut self.joint;
             jb.jac_s.copy_from_slice(&jb.rj.jac_s);
             jb.jac_m.copy_from_slice(&jb.rj.jac_m);
@@ -78,7 +76,7 @@ impl TendonWorkspace {
             return self.joint_assemble();
         }
         let ok = self.joint_factor();
-        if ok && store {
+        if ok && at_ref == Some(false) {
             let jb = &mut self.joint;
             let rj = &mut jb.rj;
             rj.jac_s.clone_from(&jb.jac_s);
@@ -95,7 +93,6 @@ impl TendonWorkspace {
     /// Any evaluation (the iterate moved, or is evaluated again) ends what
     /// [`Self::ref_check`] found.
     pub(super) fn ref_leave(&mut self) {
-        self.joint.rj.here = false;
-        self.joint.rj.store = false;
+        self.joint.rj.at_ref = None;
     }
 }
