@@ -36,6 +36,8 @@ mod predict;
 use predict::RowStart;
 // The cold start's first Jacobian, kept from the first cold solve.
 mod reference;
+// A fresh step's active set from its own linearisation.
+mod active_set;
 
 /// Newton iterations of the joint path before it hands back.
 pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
@@ -374,6 +376,11 @@ impl TendonWorkspace {
                     return Err(first_step);
                 }
                 self.joint_step(n, p);
+                if fresh {
+                    // the step's active set from its own linearisation (`active_set`)
+                    self.joint_save_branches();
+                    self.joint_linear_active_set(n, p);
+                }
                 let dx_max = self.joint.dz[..n]
                     .iter()
                     .fold(0.0f64, |m, d| m.max(d.abs()));
@@ -389,9 +396,6 @@ impl TendonWorkspace {
                 // inexact inner solves while far away (as the shooting Newton does):
                 // the trial's next holes settle to 1e-7 of the iterate's residual
                 self.joint_inner_tolerance(merit);
-                if fresh {
-                    self.joint_save_branches();
-                }
                 // 0: the step's own active set, 1: trying the full step's, 2: tried
                 let mut switched = 0u8;
                 let mut alpha = 1.0;
