@@ -594,31 +594,15 @@ impl TendonWorkspace {
     /// row was handed back.
     fn joint_switch_step(&mut self, n: usize, p: usize) -> bool {
         let jb = &mut self.joint;
-        let m = n + p;
         jb.sw_taut.copy_from_slice(&jb.lu_taut);
         jb.sw_dz.copy_from_slice(&jb.dz);
         jb.sw_f.copy_from_slice(&jb.f_prev);
         jb.lu_taut.copy_from_slice(&self.taut);
-        for i in 0..p {
-            jb.f_prev[n + i] = if jb.lu_taut[i] {
-                jb.gap0[i]
-            } else {
-                jb.arm0[i]
-            };
-        }
-        if !self.joint_assemble() {
+        if !self.joint_step_with_set(n, p) {
             self.joint_unswitch();
             return false;
         }
         let jb = &mut self.joint;
-        for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
-            *d = -row.iter().zip(&jb.f_prev).map(|(a, b)| a * b).sum::<f64>();
-        }
-        for i in 0..p {
-            if !jb.lu_taut[i] {
-                jb.dz[n + i] = -jb.ts[i];
-            }
-        }
         let dx_max = jb.dz[..n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
         if !dx_max.is_finite() || dx_max > MAX_STEP {
             self.joint_unswitch();

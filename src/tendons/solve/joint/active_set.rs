@@ -69,28 +69,41 @@ impl TendonWorkspace {
             if round == ROUNDS {
                 break;
             }
-            let jb = &mut self.joint;
-            for i in 0..p {
-                jb.f_prev[n + i] = if jb.lu_taut[i] {
-                    jb.gap0[i]
-                } else {
-                    jb.arm0[i]
-                };
-            }
-            if !self.joint_assemble() {
+            if !self.joint_step_with_set(n, p) {
                 break;
-            }
-            let jb = &mut self.joint;
-            for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
-                *d = -row.iter().zip(&jb.f_prev).map(|(a, b)| a * b).sum::<f64>();
-            }
-            for i in 0..p {
-                if !jb.lu_taut[i] {
-                    jb.dz[n + i] = -jb.ts[i];
-                }
             }
         }
         // no consistent set: the step's own
         self.joint_unswitch();
+    }
+
+    /// Newton's step from the iterate (`joint.xs`, `joint.ts`, its branches from
+    /// `joint_save_branches`) with the active set `joint.lu_taut` on the last sweep:
+    /// the tendon rows of the residual are each tendon's branch in that set (the
+    /// stretch gap when taut, the slack arm when slack); a slack tendon's step is
+    /// exactly `-T_i`. `false` when that Jacobian is singular.
+    pub(super) fn joint_step_with_set(&mut self, n: usize, p: usize) -> bool {
+        let m = n + p;
+        let jb = &mut self.joint;
+        for i in 0..p {
+            jb.f_prev[n + i] = if jb.lu_taut[i] {
+                jb.gap0[i]
+            } else {
+                jb.arm0[i]
+            };
+        }
+        if !self.joint_assemble() {
+            return false;
+        }
+        let jb = &mut self.joint;
+        for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
+            *d = -row.iter().zip(&jb.f_prev).map(|(a, b)| a * b).sum::<f64>();
+        }
+        for i in 0..p {
+            if !jb.lu_taut[i] {
+                jb.dz[n + i] = -jb.ts[i];
+            }
+        }
+        true
     }
 }
