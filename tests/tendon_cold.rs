@@ -21,8 +21,16 @@ use cablesense::tendons::TendonSettings;
 use cablesense::{Scene, Start};
 
 fn rows(scene: &Scene, ws: &cablesense::tendons::TendonWorkspace) -> Vec<ReadingRow> {
+    rows_of(scene, ws, "data/hardware/ftdcr_v4/val.csv")
+}
+
+fn rows_of(
+    scene: &Scene,
+    ws: &cablesense::tendons::TendonWorkspace,
+    path: &str,
+) -> Vec<ReadingRow> {
     let mut p = scene.readings_parser(ws);
-    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").expect("shipped data");
+    let text = std::fs::read_to_string(path).expect("shipped data");
     text.lines()
         .enumerate()
         .filter_map(|(i, l)| p.line(i + 1, l).ok().flatten())
@@ -220,4 +228,41 @@ fn cold_row_with_slack_tendons_takes_two_sweeps() {
     let dual = c1.dual_rhs - c0.dual_rhs;
     assert!(dual <= 240, "dual RHS {dual}");
     assert!(again.forward_solves <= 12, "{again:?}");
+}
+
+/// Rows that release every tendon but one (train rows 2-13 of the FTDCR v4 recording,
+/// pattern `rep1_tendon0_id4_pull`: tendon t0 pulled up to 2.2 mm, the eight others
+/// paid out 6-8 mm, so they end slack) step 130-250 in the scaled shooting unknowns
+/// from the reference equilibrium: the base force drops by the sum of the released
+/// pretensions however short a continuation step is. Solved cold, each stays on the
+/// joint path (no shooting solve of the nested method: the second continuation with
+/// the larger step limit, `joint_retry`) and reaches the warm chain's tip (1e-9 m)
+/// and taut flags. Before session 15 these rows handed back to the nested method.
+#[test]
+fn cold_rows_that_release_eight_tendons_stay_on_the_joint_path() {
+    let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let mut warm = scene.tendon_workspace().expect("workspace");
+    let mut cold = scene.tendon_workspace().expect("workspace");
+    let rows = rows_of(&scene, &warm, "data/hardware/ftdcr_v4/train.csv");
+    let mut released = 0;
+    for (i, row) in rows.iter().take(12).enumerate() {
+        let w = warm.solve_readings(&row.readings_m).expect("valid row");
+        assert!(w.status.is_converged(), "warm row {i}: {w:?}");
+        let c = cold
+            .solve_readings_from(&row.readings_m, Start::Cold)
+            .expect("valid row");
+        assert!(c.status.is_converged(), "cold row {i}: {c:?}");
+        assert_eq!(
+            c.shooting_solves, 0,
+            "cold row {i} left the joint path: {c:?}"
+        );
+        let d = (cold.tip_position() - warm.tip_position()).norm();
+        assert!(
+            d <= 1e-9,
+            "row {i}: cold tip {d:.3e} m from the warm chain's"
+        );
+        assert_eq!(cold.taut(), warm.taut(), "row {i}: taut flags");
+        released += usize::from(cold.taut().iter().filter(|t| !**t).count() == 8);
+    }
+    assert!(released >= 6, "{released} rows with eight slack tendons");
 }
