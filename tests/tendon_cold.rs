@@ -218,7 +218,7 @@ fn settings_changed_between_rows_keep_the_tensions() {
 /// passes; with the iterate's set alone (before session 15) three and 18.
 #[test]
 fn cold_row_with_slack_tendons_takes_two_sweeps() {
-    let (scene, mut ws, rows) = ftdcr_val();
+    let (_, mut ws, rows) = ftdcr_val();
     let row = &rows[rows.len() / 3].readings_m;
     let first = ws.solve_readings_from(row, Start::Cold).expect("valid row");
     assert!(first.status.is_converged(), "{first:?}");
