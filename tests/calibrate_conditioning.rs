@@ -14,8 +14,12 @@
 //!   Tolerance as in `calibrate_sensitivities.rs`: `1e-4 max|CD| + 1e-3`; the
 //!   conditioned readings are piecewise linear in both parameters, with kinks where
 //!   the shifted time crosses a row (avoided: offsets drawn inside one row spacing)
-//!   or a play switches between holding and following (a set of measure zero; a
-//!   draw landing within a step of one would show as a failing column).
+//!   or a play switches between holding and following, or a tendon between taut
+//!   and slack (sets of measure zero, but not of probability zero at a finite step:
+//!   a draw in session 16 failed the backlash column, CD 54 561 against J 50 904 on
+//!   one row). Such draws are rejected: the column's largest difference between the
+//!   forward and the backward difference (its bend within the step) must stay below
+//!   2e-3 of its size; smooth draws bend by 2e-5 to 1.5e-4, that draw by 0.1.
 //! * `conditioning_chain_rule`: the same columns against the chain rule through
 //!   the readings, `d tip / d p = sum_k d tip / d q_k * d q_k / d p`, with `d q /
 //!   d dt = -(q_{j} - q_{j-1}) / (t_j - t_{j-1})` (the interpolation's slope) and
@@ -217,10 +221,12 @@ proptest! {
         let mut x = vec![dt, b];
         x.extend([0.0; 6]);
         x.extend([0.0, 0.0, 0.005]);
-        let (_, jac) = residuals_and_jacobian(&setup, &settings, &x, true).unwrap();
+        let (r0, jac) = residuals_and_jacobian(&setup, &settings, &x, true).unwrap();
         let jac = jac.unwrap();
         let n = 3 * rows;
         let mut cd = DMatrix::zeros(n, 2);
+        // max |forward - backward difference| per column: the bend within the step
+        let mut bend = [0.0f64; 2];
         for k in 0..2 {
             let h = 1e-4 * scales[k];
             let mut xp = x.clone();
@@ -230,12 +236,22 @@ proptest! {
             let (rm, _) = residuals_and_jacobian(&setup, &settings, &xp, false).unwrap();
             for i in 0..n {
                 cd[(i, k)] = (rp[i] - rm[i]) / (2.0 * h);
+                let d2 = ((rp[i] - r0[i]) - (r0[i] - rm[i])) / h;
+                bend[k] = bend[k].max(d2.abs() * scales[k]);
             }
         }
         for k in 0..2 {
             let size = cd.column(k).amax() * scales[k];
             let worst = (jac.column(k) - cd.column(k)).amax() * scales[k];
-            println!("{}: max |CD| {size:.3e}, max |J - CD| {worst:.3e}", NAMES[k + 1]);
+            println!(
+                "{}: max |CD| {size:.3e}, max |J - CD| {worst:.3e}, bend {:.3e}",
+                NAMES[k + 1],
+                bend[k]
+            );
+            // a kink within the step (module docs): smooth draws bend by 2e-5 (time
+            // offset) to 1.5e-4 (backlash) of the column's size, the draw with a
+            // tendon switching within the backlash step by 0.1
+            prop_assume!(bend[k] <= 2e-3 * size, "{}: a kink within the step", NAMES[k + 1]);
             prop_assert!(size > 0.1, "{} does not move the residuals: {}", NAMES[k + 1], size);
             prop_assert!(worst <= 1e-4 * size + 1e-3, "{}: J {:?} CD {:?}", NAMES[k + 1],
                 jac.column(k).as_slice(), cd.column(k).as_slice());
