@@ -3,7 +3,8 @@
 //!
 //! `cargo run --release --example tendon_profile [SCENE] [READINGS] [REPEAT]`
 //! (`VERBOSE=1` a line per row, `COLD=1` every row cold, `TIPS=FILE` every row's tip,
-//! `KHZ=N` the first N ticks of a 1 kHz control loop between the rows)
+//! `KHZ=N` the first N ticks of a 1 kHz control loop between the rows, `TOL_M=X` the
+//! tendon tolerance in m instead of the default)
 use cablesense::Scene;
 use std::time::Instant;
 
@@ -17,6 +18,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cold = std::env::var_os("COLD").is_some();
     let scene = Scene::load(scene_path)?;
     let mut ws = scene.tendon_workspace()?;
+    // TOL_M=x: the tendon tolerance (m) instead of the default
+    if let Some(tol) = std::env::var("TOL_M")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
+        ws.set_tendon_settings(cablesense::tendons::TendonSettings {
+            tolerance_m: tol,
+            ..Default::default()
+        });
+    }
     let mut parser = scene.readings_parser(&ws);
     let text = std::fs::read_to_string(data)?;
     let mut rows: Vec<_> = text

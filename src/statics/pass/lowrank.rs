@@ -71,9 +71,13 @@ pub(super) fn apply(
     out.copy_from_slice(x);
     if let Some(b) = base {
         let (c, k) = b.split_at(JUMP_DIRS * l);
-        let mut kx = [0.0; JUMP_DIRS];
-        for (t, row) in k.chunks_exact(l).take(JUMP_DIRS).enumerate() {
-            kx[t] = row.iter().zip(x).map(|(a, b)| a * b).sum();
+        // the JUMP_DIRS dot products side by side (independent chains; per row the
+        // same sum in the same order as `iter().sum()` from -0.0: bit-identical)
+        let mut kx = [-0.0f64; JUMP_DIRS];
+        for (col, &xc) in x.iter().enumerate() {
+            for (t, acc) in kx.iter_mut().enumerate() {
+                *acc += k[t * l + col] * xc;
+            }
         }
         for (o, row) in out.iter_mut().zip(c.chunks_exact(JUMP_DIRS)) {
             *o += row.iter().zip(&kx).map(|(a, b)| a * b).sum::<f64>();
