@@ -66,21 +66,7 @@ impl TendonWorkspace {
         }
         self.sens_fresh = true;
         // the generalized Jacobian of the Newton step at this point (same rows)
-        let a = self.lu.matrix_mut();
-        for i in 0..p {
-            let j = self.driven[i];
-            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
-            for k in 0..p {
-                a[i * p + k] = if self.taut[i] {
-                    -self.sens[j * np + k] + if i == k { c } else { 0.0 }
-                } else if i == k {
-                    c + self.geo[i]
-                } else {
-                    0.0
-                };
-            }
-        }
-        if self.lu.factor().is_none() {
+        if !self.factor_tension_jacobian() {
             return false;
         }
         for k in 0..e {

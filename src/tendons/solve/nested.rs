@@ -166,13 +166,29 @@ impl TendonWorkspace {
 
     /// Semi-smooth Newton step `J step = -G` with the generalized Jacobian.
     fn newton_step(&mut self) -> bool {
+        if !self.factor_tension_jacobian() {
+            return false;
+        }
+        for (s, g) in self.step.iter_mut().zip(&self.g) {
+            *s = -g;
+        }
+        self.lu.solve_in_place(&mut self.step);
+        self.exact_slack_steps();
+        self.step.iter().all(|s| s.is_finite())
+    }
+
+    /// Assemble and factorise the generalized Jacobian of `G` in the tensions from
+    /// `sens` (`dl/dtheta` at the current point) and the taut flags: row `i` is
+    /// `c_i e_i - dl_i/dT` when taut, `(c_i + a_i) e_i` when slack (module docs of
+    /// the parent). `false` when it is singular. Also the load-estimation
+    /// sensitivities' matrix (`loads` submodule).
+    pub(super) fn factor_tension_jacobian(&mut self) -> bool {
         let p = self.driven.len();
         let np = self.theta.len();
         let a = self.lu.matrix_mut();
         for i in 0..p {
             let j = self.driven[i];
-            let m = &self.mech[i];
-            let c = m.compliance(self.free[i], self.mean_factor[i]);
+            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
             for k in 0..p {
                 a[i * p + k] = if self.taut[i] {
                     -self.sens[j * np + k] + if i == k { c } else { 0.0 }
@@ -183,14 +199,6 @@ impl TendonWorkspace {
                 };
             }
         }
-        if self.lu.factor().is_none() {
-            return false;
-        }
-        for i in 0..p {
-            self.step[i] = -self.g[i];
-        }
-        self.lu.solve_in_place(&mut self.step);
-        self.exact_slack_steps();
-        self.step.iter().all(|s| s.is_finite())
+        self.lu.factor().is_some()
     }
 }
