@@ -8,8 +8,8 @@ use super::super::TendonWorkspace;
 use super::MAX_STEP;
 
 /// Step limit of a row's second continuation, when the first (at [`MAX_STEP`])
-/// failed (`TendonWorkspace::joint_retry`).
-pub(super) const MAX_STEP_RETRY: f64 = 300.0;
+/// failed (`TendonWorkspace::joint_retry`): three times it.
+pub(super) const MAX_STEP_RETRY: f64 = 3.0 * MAX_STEP;
 /// Continuation steps of a row aim at first Newton steps of this fraction of the
 /// step limit (so that the step's nonlinearity leaves room).
 const SUBSTEP_FRACTION: f64 = 0.5;
