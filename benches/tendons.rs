@@ -23,6 +23,10 @@
 //!   per recorded row (`tendon_readings_warm`), whose readings change ~600 times as
 //!   much from one solve to the next.
 //!
+//! * `tendon_readings_warm_arc`, `tendon_track_row_arc`: the warm and track rows
+//!   with `numerics.cable_coupling = "arc"` (the next holes predicted by an arc of
+//!   the gap, not solved for: `statics/pass/arc.rs`, `tests/arc_coupling.rs`).
+//!
 //! Rows that do not converge during timing are counted on stderr. Log:
 //! `benches/README.md`.
 
@@ -125,6 +129,32 @@ fn benches(c: &mut Criterion) {
             tick.next(&rows, &times);
             let r = ws.solve_readings(black_box(&tick.q));
             failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+        })
+    });
+    // the same warm rows and track rows with the arc coupling (`statics/pass/arc.rs`:
+    // next holes predicted, not solved; tips within 8 um mean of the condensed ones)
+    let mut arc_scene = scene.clone();
+    arc_scene.numerics.cable_coupling = cablesense::CableCoupling::Arc;
+    let mut ws = arc_scene.tendon_workspace().expect("tendon workspace");
+    g.bench_function("tendon_readings_warm_arc", |b| {
+        b.iter(|| {
+            let r = ws.solve_readings(black_box(&rows[k % rows.len()].readings_m));
+            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+            k += 1;
+        })
+    });
+    g.bench_function("tendon_track_row_arc", |b| {
+        b.iter(|| {
+            let row = &rows[k % rows.len()];
+            let r = ws.solve_readings(&row.readings_m);
+            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+            let tip = ws.tip_position();
+            let rec = serde_json::json!({
+                "line": row.line, "tip_position_m": [tip.x, tip.y, tip.z],
+                "tensions_n": ws.tensions(), "taut": ws.taut(),
+            });
+            black_box(rec.to_string());
+            k += 1;
         })
     });
     g.finish();

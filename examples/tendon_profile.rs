@@ -4,7 +4,8 @@
 //! `cargo run --release --example tendon_profile [SCENE] [READINGS] [REPEAT]`
 //! (`VERBOSE=1` a line per row, `COLD=1` every row cold, `TIPS=FILE` every row's tip,
 //! `KHZ=N` the first N ticks of a 1 kHz control loop between the rows, `TOL_M=X` the
-//! tendon tolerance in m instead of the default)
+//! tendon tolerance in m instead of the default, `COUPLING=arc|exact|condensed` the
+//! cable coupling instead of the scene's)
 use cablesense::Scene;
 use std::time::Instant;
 
@@ -16,7 +17,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let verbose = std::env::var_os("VERBOSE").is_some();
     // COLD=1: every row from a cold start (the `tendon_readings_cold` bench case)
     let cold = std::env::var_os("COLD").is_some();
-    let scene = Scene::load(scene_path)?;
+    let mut scene = Scene::load(scene_path)?;
+    // COUPLING=arc|exact|condensed: the cable coupling instead of the scene's
+    if let Ok(c) = std::env::var("COUPLING") {
+        scene.numerics.cable_coupling = match c.as_str() {
+            "arc" => cablesense::CableCoupling::Arc,
+            "exact" => cablesense::CableCoupling::Exact,
+            _ => cablesense::CableCoupling::Condensed,
+        };
+    }
     let mut ws = scene.tendon_workspace()?;
     // TOL_M=x: the tendon tolerance (m) instead of the default
     if let Some(tol) = std::env::var("TOL_M")

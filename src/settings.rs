@@ -17,7 +17,9 @@ pub enum RodModel {
 /// How a tensioned cable's pull on a disk, which points along the chord to the *next*
 /// disk (not yet integrated when the pass reaches this disk), is resolved.
 ///
-/// Both solve the same equations to the same tolerance; they differ in cost.
+/// `condensed` and `exact` solve the same equations to the same tolerance and differ
+/// in cost; `arc` replaces the not-yet-integrated next disk by a prediction (a model
+/// approximation, cheaper still).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CableCoupling {
@@ -32,6 +34,17 @@ pub enum CableCoupling {
     /// The hole positions of every tensioned cable on route disks 1..K-1 are shooting
     /// unknowns beside the base wrench (3 per hole), with matching residuals.
     Exact,
+    /// The next hole is predicted from the state at the disk, not solved for: the gap
+    /// to the next disk is taken as a circular arc (constant curvature and strain
+    /// from the internal moment and force at the gap's midpoint, rigid-body
+    /// exponential map), and the disk's chord forces and that prediction are iterated
+    /// a fixed number of times (`statics::pass::arc`). No local iteration, no hole
+    /// unknowns, no jump directions in the sweep: the pass is explicit, and cheaper.
+    /// An approximation of the discrete routing of thesis 3.8.1: its error is the
+    /// arc's miss of the integrated next disk, second order in the gap; cable
+    /// lengths still use the integrated holes. Measured against `condensed` in
+    /// `tests/arc_coupling.rs`.
+    Arc,
 }
 
 /// How the guide disks' mass enters the model.

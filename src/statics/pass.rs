@@ -10,6 +10,7 @@
 //! With the condensed coupling the hole positions are not unknowns: they are solved
 //! inside the pass (module `condensed`).
 
+mod arc;
 mod condensed;
 mod lowrank;
 mod small;
@@ -638,6 +639,10 @@ fn apply_event<T: Real>(
             }
             if plan.point_guides {
                 y.n -= v3::<T>(&(plan.gravity * (plan.guide_mass[g] * load_scale)));
+            }
+            if plan.arc {
+                arc::guide_chords(plan, g, y, buf, load_scale);
+                return;
             }
             for &(j, k) in &plan.guide_cables[g] {
                 let c = &plan.cables[j];

@@ -90,6 +90,10 @@ pub(crate) struct PlanCable {
     /// plate) relative to the actuator's: 1 without friction, the capstan factors
     /// `exp(+-mu theta)` with it ([`crate::tendons`]).
     pub factor: Vec<f64>,
+    /// Arc coupling ([`Plan::arc`]): per chord from route disk `k` to `k + 1`, the
+    /// arc length of the gap (m) and the section whose stiffness it takes (the one
+    /// at the gap's midpoint). Empty otherwise.
+    pub gap: Vec<(f64, usize)>,
 }
 
 /// Everything a pass needs.
@@ -134,6 +138,9 @@ pub(crate) struct Plan {
     /// (route position + 1, on the next guide) the chord at this guide points to.
     /// Filled only when `condensed`.
     pub pending: Vec<Vec<(usize, usize)>>,
+    /// Arc coupling ([`crate::settings::CableCoupling::Arc`]): the chord towards the
+    /// next hole points at a predicted hole (`statics::pass::arc`); no hole unknowns.
+    pub arc: bool,
     /// Local dual directions a sweep carries: [`JUMP_DIRS`] when `condensed`, else 0.
     pub max_local: usize,
     /// Largest `3 * pending[g].len()`: the size of a segment's local iteration.
@@ -313,13 +320,14 @@ impl Plan {
         if !condensed {
             pending.iter_mut().for_each(Vec::clear);
         }
+        let arc = settings.cable_coupling == CableCoupling::Arc;
         let max_local = if condensed { JUMP_DIRS } else { 0 };
         let max_pending_dirs = if condensed { 3 * max_pending } else { 0 };
         for (j, c) in robot.cables().iter().enumerate() {
             for (k, &g) in c.route.iter().enumerate() {
                 guide_cables[g].push((j, k));
             }
-            let unknowns = if !condensed && is_tensioned(j) && c.route.len() > 1 {
+            let unknowns = if !condensed && !arc && is_tensioned(j) && c.route.len() > 1 {
                 let u = n_unknowns;
                 n_unknowns += 3 * (c.route.len() - 1);
                 Some(u)
@@ -340,6 +348,17 @@ impl Plan {
                     .map_or_else(|| c.hole_local[c.route.len() - 1], |p| p.eval(c.end_s)[0]),
                 routed: c.path.is_some(),
                 unknowns,
+                gap: if arc {
+                    c.route
+                        .windows(2)
+                        .map(|w| {
+                            let (s0, s1) = (robot.guides()[w[0]].s, robot.guides()[w[1]].s);
+                            (s1 - s0, robot.section_at(0.5 * (s0 + s1)))
+                        })
+                        .collect()
+                } else {
+                    Vec::new()
+                },
             });
         }
         let ei = robot.sections()[0].stiffness.bend_twist.x;
@@ -381,6 +400,7 @@ impl Plan {
             point_params,
             tension_param,
             condensed,
+            arc,
             pending,
             max_local,
             max_pending_dirs,

@@ -17,6 +17,9 @@ use nalgebra::Vector3;
 
 /// Newton iterations a cold start gets before continuation takes over.
 const COLD_BUDGET: usize = 4;
+/// Directions of the arc coupling's sweep buffer (`b_arc`): the shooting unknowns and
+/// up to nine tensions, a three-segment, nine-tendon robot's `[x; T]`.
+const ARC_SWEEP: usize = 15;
 /// Newton iterations per continuation step.
 const CONTINUATION_BUDGET: usize = 10;
 
@@ -152,6 +155,9 @@ pub struct Workspace {
     b6: PassBuf<Dual<6>>,
     /// Condensed coupling: the sweep buffer with the plan's local directions.
     wide: Option<Wide>,
+    /// Arc coupling: one sweep over up to [`ARC_SWEEP`] directions of `[x; theta]`
+    /// (a three-segment, nine-tendon robot's `[x; T]` in one pass, not three `Dual<6>`).
+    b_arc: Option<Box<PassBuf<Dual<ARC_SWEEP>>>>,
     /// Load scale and outcome of the last `f64` pass (its unknowns are `b64.x`).
     last_pass: Option<f64>,
     has_solution: bool,
@@ -207,6 +213,7 @@ impl Workspace {
             b3: PassBuf::new(&plan),
             b6: PassBuf::new(&plan),
             wide: Wide::new(&plan),
+            b_arc: plan.arc.then(|| Box::new(PassBuf::new(&plan))),
             last_pass: None,
             x: vec![0.0; n],
             x_trial: vec![0.0; n],
@@ -315,6 +322,9 @@ impl Workspace {
             self.b6.theta[k] = Dual::constant(*v);
             if let Some(w) = self.wide.as_mut() {
                 w.set_theta(k, *v);
+            }
+            if let Some(b) = self.b_arc.as_mut() {
+                b.theta[k] = Dual::constant(*v);
             }
         }
     }
@@ -535,6 +545,7 @@ impl Workspace {
             + self.b3.rhs_evals
             + self.b6.rhs_evals
             + self.wide.as_ref().map_or(0, Wide::rhs_evals)
+            + self.b_arc.as_ref().map_or(0, |b| b.rhs_evals)
     }
 }
 

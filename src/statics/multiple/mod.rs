@@ -180,6 +180,12 @@ impl Multi {
         if !plan.params.is_empty() {
             return false;
         }
+        // the arc coupling's chords point at predicted holes (`pass::arc`); the
+        // intervals here have the next disk as a node and would solve the exact
+        // routing instead: another model than the single pass's
+        if plan.arc {
+            return false;
+        }
         if !plan.cables.iter().any(|c| c.tensioned) {
             return true;
         }

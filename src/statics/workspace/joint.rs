@@ -7,7 +7,7 @@
 //! it reads the workspace's private buffers without widening their visibility; it
 //! adds methods only and changes none of the forward solver.
 
-use super::{max_abs, sweep, SolveStatus, Wide, Workspace};
+use super::{max_abs, sweep, SolveStatus, Wide, Workspace, ARC_SWEEP};
 use crate::math::Dual;
 
 /// Cumulative integration counts of one workspace (all solves and sweeps so far).
@@ -53,6 +53,12 @@ impl Workspace {
         }
         let ok = if w <= 3 {
             sweep::<3>(&self.plan, x, 0, true, &mut self.b3, jac_s, jac_m, 1.0)
+        } else if let Some(b) = self.b_arc.as_mut().filter(|_| w > 6 && w <= ARC_SWEEP) {
+            let ok = sweep(&self.plan, x, 0, true, b, jac_s, jac_m, 1.0);
+            for k in 0..p {
+                b.theta[k] = Dual::constant(self.b64.theta[k]);
+            }
+            ok
         } else {
             (0..w)
                 .step_by(6)
@@ -137,7 +143,8 @@ impl Workspace {
             f64_rhs: self.b64.rhs_evals,
             dual_rhs: self.b3.rhs_evals
                 + self.b6.rhs_evals
-                + self.wide.as_ref().map_or(0, Wide::rhs_evals),
+                + self.wide.as_ref().map_or(0, Wide::rhs_evals)
+                + self.b_arc.as_ref().map_or(0, |b| b.rhs_evals),
             local_iterations: self.b64.retries,
         }
     }

@@ -30,6 +30,21 @@ impl Workspace {
                 &mut self.sens_m,
                 1.0,
             )
+        } else if let Some(b) = self.b_arc.as_mut().filter(|_| w > 6 && w <= ARC_SWEEP) {
+            let ok = sweep(
+                &self.plan,
+                &self.x,
+                0,
+                true,
+                b,
+                &mut self.sens_s,
+                &mut self.sens_m,
+                1.0,
+            );
+            for k in 0..p {
+                b.theta[k] = Dual::constant(self.b64.theta[k]);
+            }
+            ok
         } else {
             (0..w).step_by(6).all(|c0| {
                 sweep::<6>(
