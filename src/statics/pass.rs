@@ -76,6 +76,9 @@ pub(crate) struct PassBuf<T: Real> {
     pub lengths: Vec<T>,
     /// `lengths` at the condensed coupling's checkpoint.
     lengths_ck: Vec<T>,
+    /// Arc coupling: the tension of each cable's chord on from the current disk (N),
+    /// computed once per disk for the rounds of `arc::guide_chords`.
+    arc_t: Vec<T>,
     pub rhs_evals: u64,
     /// Condensed coupling: segment re-integrations (local iterations) so far.
     pub retries: u64,
@@ -154,6 +157,7 @@ impl<T: Real> PassBuf<T> {
             holes: plan.cables.iter().map(|c| vec![z; c.len]).collect(),
             lengths: vec![T::zero(); plan.cables.len()],
             lengths_ck: vec![T::zero(); plan.cables.len()],
+            arc_t: vec![T::zero(); if plan.arc { plan.cables.len() } else { 0 }],
             rhs_evals: 0,
             retries: 0,
             local_tol: LOCAL_TOL,

@@ -210,6 +210,7 @@ pub(super) fn guide_chords<T: Real>(
         if k + 1 < c.len {
             any_next = true;
             let t_next = actuator_tension(plan, buf, j, load_scale).scale(c.factor[k + 1]);
+            buf.arc_t[j] = t_next;
             let ua = u.dot(&axis);
             let f = (u - axis.map(|x| x * (ua + ua))).map(|x| x * t_next);
             gn += f;
@@ -246,8 +247,14 @@ pub(super) fn guide_chords<T: Real>(
             };
             let rho = &c.hole_local[k];
             let d = gp.tau + mat_vec_f64(&gp.e, &c.hole_local[k + 1]) - v3::<T>(rho);
-            let t = actuator_tension(plan, buf, j, load_scale).scale(c.factor[k + 1]);
-            let f = unit(d).map(|x| x * t);
+            // t d / |d| (as `unit(d) * t`, with one product fewer per component)
+            let dd = d.dot(&d);
+            let f = if dd.re() > 0.0 {
+                let s = buf.arc_t[j] / dd.sqrt();
+                d.map(|x| x * s)
+            } else {
+                d
+            };
             fl += f;
             ml += f64_cross(rho, &f);
         }
