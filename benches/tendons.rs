@@ -78,6 +78,20 @@ impl Ticks {
     }
 }
 
+/// What `track` does per row, without the write: a warm solve and its JSON record.
+/// `true` when the row converged.
+fn track_row(ws: &mut cablesense::tendons::TendonWorkspace, row: &ReadingRow) -> bool {
+    let r = ws.solve_readings(&row.readings_m);
+    let ok = r.is_ok_and(|r| r.status.is_converged());
+    let tip = ws.tip_position();
+    let rec = serde_json::json!({
+        "line": row.line, "tip_position_m": [tip.x, tip.y, tip.z],
+        "tensions_n": ws.tensions(), "taut": ws.taut(),
+    });
+    black_box(rec.to_string());
+    ok
+}
+
 fn benches(c: &mut Criterion) {
     let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
     let mut ws = scene.tendon_workspace().expect("tendon workspace");
@@ -102,15 +116,7 @@ fn benches(c: &mut Criterion) {
     });
     g.bench_function("tendon_track_row", |b| {
         b.iter(|| {
-            let row = &rows[k % rows.len()];
-            let r = ws.solve_readings(&row.readings_m);
-            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
-            let tip = ws.tip_position();
-            let rec = serde_json::json!({
-                "line": row.line, "tip_position_m": [tip.x, tip.y, tip.z],
-                "tensions_n": ws.tensions(), "taut": ws.taut(),
-            });
-            black_box(rec.to_string());
+            failed += usize::from(!track_row(&mut ws, &rows[k % rows.len()]));
             k += 1;
         })
     });
@@ -145,15 +151,7 @@ fn benches(c: &mut Criterion) {
     });
     g.bench_function("tendon_track_row_arc", |b| {
         b.iter(|| {
-            let row = &rows[k % rows.len()];
-            let r = ws.solve_readings(&row.readings_m);
-            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
-            let tip = ws.tip_position();
-            let rec = serde_json::json!({
-                "line": row.line, "tip_position_m": [tip.x, tip.y, tip.z],
-                "tensions_n": ws.tensions(), "taut": ws.taut(),
-            });
-            black_box(rec.to_string());
+            failed += usize::from(!track_row(&mut ws, &rows[k % rows.len()]));
             k += 1;
         })
     });

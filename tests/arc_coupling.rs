@@ -19,12 +19,10 @@
 
 mod common;
 
-use cablesense::calibrate::{
-    CalibrationModel, ColumnMap, ReadingsModel, Recording, RigidTransform, TipErrors,
-};
+use cablesense::calibrate::Recording;
 use cablesense::nalgebra::Vector3;
+use cablesense::validation;
 use cablesense::{CableCoupling, Scene, Start};
-use common::Tol;
 use proptest::prelude::*;
 
 const DIR: &str = env!("CARGO_MANIFEST_DIR");
@@ -65,41 +63,26 @@ fn arc_matches_condensed_on_a_tension_driven_robot_and_converges_with_the_gap() 
     );
 }
 
-/// Val RMSE (mean offset removed, m) of the stored calibration with `coupling`, and
-/// the rows that failed.
+/// Val RMSE (mean offset removed, m) of the stored calibration with `coupling`
+/// (`validate`'s hardware benchmark on val.csv alone), and the rows that failed.
 fn val_rmse(coupling: CableCoupling) -> (f64, usize) {
-    let mut scene =
-        Scene::load(format!("{DIR}/data/calibration/ftdcr_v4_calibrated.toml")).unwrap();
-    scene.numerics.cable_coupling = coupling;
-    let spec = scene.calibration.clone().unwrap();
-    let val = Recording::load(
-        format!("{DIR}/data/hardware/ftdcr_v4/val.csv"),
-        &ColumnMap::from_spec(&spec),
+    let mut scene = Scene::parse_validated(
+        validation::CALIBRATED_SCENE,
+        std::path::Path::new("ftdcr_v4_calibrated.toml"),
+        false,
     )
     .unwrap();
-    let frame = RigidTransform::from_vector(
-        &Vector3::from(spec.capture_to_base.rotation_vector),
-        &Vector3::from(spec.capture_to_base.translation_m),
-    );
-    let offset = Vector3::from(spec.marker_offset_m);
-    let mut model = ReadingsModel::new(&scene, &[], &val.input_names, spec.marker_s_m).unwrap();
-    let (mut predicted, mut measured, mut failed) = (Vec::new(), Vec::new(), 0);
-    for row in &val.rows {
-        match model.predict(row) {
-            Ok(pose) => {
-                predicted.push(pose.position + pose.rotation * offset);
-                measured.push(frame.apply(&row.marker_m));
-            }
-            Err(_) => {
-                failed += 1;
-                model.restart();
-            }
-        }
-    }
-    (
-        TipErrors::of(&predicted, &measured).mean_removed.rmse_m,
-        failed,
-    )
+    scene.numerics.cable_coupling = coupling;
+    let stored = validation::parse_summary("summary", validation::SUMMARY_JSON).unwrap();
+    let map = validation::column_map(&scene).unwrap();
+    let val = Recording::parse_str("val.csv", validation::VAL_CSV, &map).unwrap();
+    let settings = validation::HardwareSettings {
+        train_stride: 0,
+        track: false,
+        ..Default::default()
+    };
+    let b = validation::hardware_benchmark(&scene, &stored, None, &val, &settings).unwrap();
+    (b.val.mean_removed.rmse_m, b.failed_rows.len())
 }
 
 #[test]
@@ -117,8 +100,6 @@ fn arc_keeps_the_ftdcr_val_error_of_the_stored_calibration() {
         "arc {arc:e} m against condensed {condensed:e} m"
     );
 }
-
-const H: f64 = 1e-4;
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 3, ..ProptestConfig::default() })]
@@ -140,43 +121,7 @@ proptest! {
             .collect();
         let rep = tw.solve_readings(&all[row % all.len()]).expect("valid readings");
         prop_assert!(rep.status.is_converged(), "{rep:?}");
-        let theta: Vec<f64> = tw.tensions().to_vec();
-        let ws = tw.workspace_mut();
-        let (n, p, c) = (ws.unknowns(), theta.len(), ws.robot().cables().len());
-        let w = n + p;
-        let x: Vec<f64> = ws
-            .unknowns_vector()
-            .iter()
-            .enumerate()
-            .map(|(i, x)| x + 1e-3 * (((seed as usize + 7 * i) % 11) as f64 - 5.0) / 5.0)
-            .collect();
-        ws.set_theta(&theta);
-        let (mut js, mut jm) = (vec![0.0; n * w], vec![0.0; c * w]);
-        prop_assert!(ws.joint_jacobians(&x, &mut js, &mut jm));
-        let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
-        let (mut lp, mut lm) = (vec![0.0; c], vec![0.0; c]);
-        let (tol_r, tol_l) = (Tol::both(1e-5, 1e-5), Tol::both(1e-9, 1e-5));
-        for col in 0..w {
-            for (sign, r, l) in [(1.0, &mut rp, &mut lp), (-1.0, &mut rm, &mut lm)] {
-                let (mut xs, mut th) = (x.clone(), theta.clone());
-                if col < n {
-                    xs[col] += sign * H;
-                } else {
-                    th[col - n] += sign * H;
-                }
-                ws.set_theta(&th);
-                prop_assert!(ws.adopt_unknowns(&xs, true).is_finite());
-                r.copy_from_slice(ws.residual_vector());
-                ws.cable_lengths_into(l);
-            }
-            for k in 0..n {
-                let (fd, exact) = ((rp[k] - rm[k]) / (2.0 * H), js[k * w + col]);
-                prop_assert!(tol_r.ok(fd, exact), "dr[{k}]/dz[{col}]: exact {exact:e}, fd {fd:e}");
-            }
-            for j in 0..c {
-                let (fd, exact) = ((lp[j] - lm[j]) / (2.0 * H), jm[j * w + col]);
-                prop_assert!(tol_l.ok(fd, exact), "dl[{j}]/dz[{col}]: exact {exact:e}, fd {fd:e}");
-            }
-        }
+        let check = common::joint_partials_against_central_differences(&mut tw, seed);
+        prop_assert!(check.is_ok(), "{}", check.unwrap_err());
     }
 }

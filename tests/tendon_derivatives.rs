@@ -31,7 +31,6 @@ use common::Tol;
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
-const H: f64 = 1e-4;
 const HT: f64 = 1e-4;
 
 /// Readings of the recording's rows (m, in the scene's tendon order).
@@ -67,51 +66,8 @@ proptest! {
         let all = rows(&scene, &tw);
         let rep = tw.solve_readings(&all[row % all.len()]).expect("valid readings");
         prop_assert!(rep.status.is_converged(), "{rep:?}");
-        let theta: Vec<f64> = tw.tensions().to_vec();
-        let ws = tw.workspace_mut();
-        let n = ws.unknowns();
-        let p = theta.len();
-        let c = ws.robot().cables().len();
-        let w = n + p;
-        // off the equilibrium, so the partials are not only those of a solution
-        let x: Vec<f64> = ws
-            .unknowns_vector()
-            .iter()
-            .enumerate()
-            .map(|(i, x)| x + 1e-3 * (((seed as usize + 7 * i) % 11) as f64 - 5.0) / 5.0)
-            .collect();
-        ws.set_theta(&theta);
-        let (mut js, mut jm) = (vec![0.0; n * w], vec![0.0; c * w]);
-        prop_assert!(ws.joint_jacobians(&x, &mut js, &mut jm));
-        let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
-        let (mut lp, mut lm) = (vec![0.0; c], vec![0.0; c]);
-        let tol_r = Tol::both(1e-5, 1e-5);
-        let tol_l = Tol::both(1e-9, 1e-5);
-        for col in 0..w {
-            for (sign, r, l) in [(1.0, &mut rp, &mut lp), (-1.0, &mut rm, &mut lm)] {
-                let mut xs = x.clone();
-                let mut th = theta.clone();
-                if col < n {
-                    xs[col] += sign * H;
-                } else {
-                    th[col - n] += sign * H;
-                }
-                ws.set_theta(&th);
-                prop_assert!(ws.adopt_unknowns(&xs, true).is_finite());
-                r.copy_from_slice(ws.residual_vector());
-                ws.cable_lengths_into(l);
-            }
-            for k in 0..n {
-                let fd = (rp[k] - rm[k]) / (2.0 * H);
-                let exact = js[k * w + col];
-                prop_assert!(tol_r.ok(fd, exact), "dr[{k}]/dz[{col}]: exact {exact:e}, fd {fd:e}");
-            }
-            for j in 0..c {
-                let fd = (lp[j] - lm[j]) / (2.0 * H);
-                let exact = jm[j * w + col];
-                prop_assert!(tol_l.ok(fd, exact), "dl[{j}]/dz[{col}]: exact {exact:e}, fd {fd:e}");
-            }
-        }
+        let check = common::joint_partials_against_central_differences(&mut tw, seed);
+        prop_assert!(check.is_ok(), "{}", check.unwrap_err());
     }
 
     /// The total `dl/dT` of the equilibrium (implicit function theorem through the

@@ -292,3 +292,64 @@ pub fn two_section_robot_mixed_holes() -> Robot {
     };
     Robot::new(spec).unwrap()
 }
+
+/// The joint sweep's partials `[R_x R_T]` and `[dl/dx dl/dT]`
+/// (`Workspace::joint_jacobians`) of a tendon workspace solved at a row, at a point
+/// off that equilibrium (the unknowns moved by up to 1e-3, pattern from `seed`),
+/// against central differences of step `h = 1e-4` of the shooting residual and the
+/// path lengths: residual entries to 1e-5 absolute + 1e-5 relative, length entries
+/// to 1e-9 absolute + 1e-5 relative (why these: `tests/tendon_derivatives.rs`).
+/// `Err` names the first entry that disagrees.
+pub fn joint_partials_against_central_differences(
+    tw: &mut cablesense::tendons::TendonWorkspace,
+    seed: u64,
+) -> Result<(), String> {
+    let (h, tol_r, tol_l) = (1e-4, Tol::both(1e-5, 1e-5), Tol::both(1e-9, 1e-5));
+    let theta: Vec<f64> = tw.tensions().to_vec();
+    let ws = tw.workspace_mut();
+    let (n, p, c) = (ws.unknowns(), theta.len(), ws.robot().cables().len());
+    let w = n + p;
+    // off the equilibrium, so the partials are not only those of a solution
+    let x: Vec<f64> = ws
+        .unknowns_vector()
+        .iter()
+        .enumerate()
+        .map(|(i, x)| x + 1e-3 * (((seed as usize + 7 * i) % 11) as f64 - 5.0) / 5.0)
+        .collect();
+    ws.set_theta(&theta);
+    let (mut js, mut jm) = (vec![0.0; n * w], vec![0.0; c * w]);
+    if !ws.joint_jacobians(&x, &mut js, &mut jm) {
+        return Err("the sweep failed".into());
+    }
+    let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
+    let (mut lp, mut lm) = (vec![0.0; c], vec![0.0; c]);
+    for col in 0..w {
+        for (sign, r, l) in [(1.0, &mut rp, &mut lp), (-1.0, &mut rm, &mut lm)] {
+            let (mut xs, mut th) = (x.clone(), theta.clone());
+            if col < n {
+                xs[col] += sign * h;
+            } else {
+                th[col - n] += sign * h;
+            }
+            ws.set_theta(&th);
+            if !ws.adopt_unknowns(&xs, true).is_finite() {
+                return Err(format!("the pass failed at column {col}, sign {sign}"));
+            }
+            r.copy_from_slice(ws.residual_vector());
+            ws.cable_lengths_into(l);
+        }
+        for k in 0..n {
+            let (fd, exact) = ((rp[k] - rm[k]) / (2.0 * h), js[k * w + col]);
+            if !tol_r.ok(fd, exact) {
+                return Err(format!("dr[{k}]/dz[{col}]: exact {exact:e}, fd {fd:e}"));
+            }
+        }
+        for j in 0..c {
+            let (fd, exact) = ((lp[j] - lm[j]) / (2.0 * h), jm[j * w + col]);
+            if !tol_l.ok(fd, exact) {
+                return Err(format!("dl[{j}]/dz[{col}]: exact {exact:e}, fd {fd:e}"));
+            }
+        }
+    }
+    Ok(())
+}
