@@ -262,3 +262,46 @@ pub(super) fn guide_chords<T: Real>(
     y.n -= jn + mat_vec(&y.rot, &fl);
     y.m -= jm + mat_vec(&y.rot, &ml);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The series branch against the closed form, on both sides of its threshold
+    /// (relative 1e-10: the series' truncation is below 3e-11 at `x^2 = 0.25`).
+    #[test]
+    fn exp_coefficients_match_the_closed_form() {
+        for x in [1e-3, 0.1, 0.3, 0.49, 0.501, 1.0, 2.5] {
+            let (a, b, c) = exp_coefficients(x * x);
+            let (s, co) = f64::sin_cos(x);
+            let want = [s / x, (1.0 - co) / (x * x), (x - s) / (x * x * x)];
+            for (got, want) in [a, b, c].into_iter().zip(want) {
+                assert!(
+                    (got - want).abs() <= 1e-10 * want.abs(),
+                    "x {x}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    /// A Kirchhoff gap under a pure bending moment (no force) is a circular arc:
+    /// the predicted pose is that arc's, exactly (rotation about x by `theta = h k`,
+    /// centre at `(0, -(1 - cos theta)/k, sin theta/k)`), to 1e-14 relative.
+    #[test]
+    fn a_gap_under_pure_bending_is_the_exact_arc() {
+        let (ei, k, h) = (2.5e-3, 7.0, 0.02);
+        let co = Coeffs {
+            inv_c: Vector3::new(1.0 / ei, 1.0 / ei, 1.0 / (0.77 * ei)),
+            inv_d: Vector3::zeros(),
+            u_star: Vector3::zeros(),
+            f: Vector3::zeros(),
+            kirchhoff: true,
+        };
+        let gap = predict_gap(h, &co, &Vector3::zeros(), &Vector3::new(ei * k, 0.0, 0.0));
+        let t = h * k;
+        let tau = Vector3::new(0.0, -(1.0 - t.cos()) / k, t.sin() / k);
+        let e = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), t).into_inner();
+        assert!((gap.tau - tau).norm() <= 1e-14 * h, "{} vs {tau}", gap.tau);
+        assert!((gap.e - e).norm() <= 1e-14, "{} vs {e}", gap.e);
+    }
+}
