@@ -197,7 +197,8 @@ pub(super) fn guide_chords<T: Real>(
         if !c.tensioned {
             continue;
         }
-        let t = actuator_tension(plan, buf, j, load_scale).scale(c.factor[k]);
+        let t_act = actuator_tension(plan, buf, j, load_scale);
+        let t = t_act.scale(c.factor[k]);
         let prev = if k == 0 {
             v3::<T>(&c.base_hole)
         } else {
@@ -209,7 +210,7 @@ pub(super) fn guide_chords<T: Real>(
         jm += cross(&arm, &f);
         if k + 1 < c.len {
             any_next = true;
-            let t_next = actuator_tension(plan, buf, j, load_scale).scale(c.factor[k + 1]);
+            let t_next = t_act.scale(c.factor[k + 1]);
             buf.arc_t[j] = t_next;
             let ua = u.dot(&axis);
             let f = (u - axis.map(|x| x * (ua + ua))).map(|x| x * t_next);
