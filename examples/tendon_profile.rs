@@ -5,7 +5,8 @@
 //! (`VERBOSE=1` a line per row, `COLD=1` every row cold, `TIPS=FILE` every row's tip,
 //! `KHZ=N` the first N ticks of a 1 kHz control loop between the rows, `TOL_M=X` the
 //! tendon tolerance in m instead of the default, `COUPLING=arc|exact|condensed` the
-//! cable coupling instead of the scene's)
+//! cable coupling instead of the scene's, `TOL=X` the shooting tolerance instead of the
+//! scene's)
 use cablesense::Scene;
 use std::time::Instant;
 
@@ -25,6 +26,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "exact" => cablesense::CableCoupling::Exact,
             _ => cablesense::CableCoupling::Condensed,
         };
+    }
+    // TOL=x: the shooting tolerance (scaled) instead of the scene's
+    if let Some(tol) = std::env::var("TOL")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
+        scene.numerics.tolerance = tol;
     }
     let mut ws = scene.tendon_workspace()?;
     // TOL_M=x: the tendon tolerance (m) instead of the default

@@ -57,6 +57,16 @@ const CHORD_PROBE: usize = 16;
 /// row 420 -> 345 for 6039 -> 6257 `f64` ones (0.9: 338 and 6296, about the same;
 /// always trying the chord at a row's start: 311 and 7286, worse).
 const CHORD_CONTRACTION: f64 = 0.5;
+/// The line search and the inner settle tolerance weigh a tendon mismatch `G` of
+/// this many metres like a unit of the scaled shooting residual `r` (at the default
+/// tolerances, 1e-10 and 1e-12 m, their ratio, so the default path is unchanged).
+/// Why a fixed weight and not `tol / tol_G`: with the tolerances' ratio, loosening
+/// only `TendonSettings::tolerance_m` to 1e-9 m shrank the weight of `G` 1 000-fold,
+/// and the second-order growth of `r` over a full Newton step then outweighed the
+/// fall of `G`: the line search cut every fresh step to 1/32-1/64, the joint path
+/// handed every FTDCR v4 val row to the nested method, and a row cost ~120 ms
+/// instead of ~0.7 ms. The stopping test still uses each tolerance on its own.
+const MERIT_G_UNIT_M: f64 = 1e-2;
 /// Buffers of the joint path, sized once.
 #[derive(Clone)]
 pub(super) struct JointBufs {
@@ -105,8 +115,11 @@ pub(super) struct JointBufs {
     /// previous row's) and at the row (continuation steps go from one to the other).
     pub(super) free_prev: Vec<f64>,
     free_row: Vec<f64>,
-    /// `|| [r / tol; G / tol_G] ||_2` at the last evaluation (line-search merit).
+    /// `|| [r; w G] ||_2 / tol` at the last evaluation (line-search merit; `w` from
+    /// [`MERIT_G_UNIT_M`], `TendonWorkspace::joint_norms`), and the same vector's
+    /// largest component (`settle`: what the next passes' settle tolerance follows).
     l2: f64,
+    settle: f64,
     /// Settle tolerance of the inner passes now in effect (fraction of the length).
     inner_tol: f64,
     /// Row-to-row predictor (`predict` submodule): the solutions `[x; T]` of the
@@ -171,6 +184,7 @@ impl JointBufs {
             first_chord_ok: true,
             rows_fresh: 0,
             l2: f64::INFINITY,
+            settle: f64::INFINITY,
             inner_tol: LOCAL_TOL,
             hist_z: vec![0.0; predict::HISTORY * (n + p)],
             hist_f: vec![0.0; predict::HISTORY * p],
@@ -335,7 +349,7 @@ impl TendonWorkspace {
                 }
                 // inexact inner solves while far away (as the shooting Newton does):
                 // the trial's next holes settle to 1e-7 of the iterate's residual
-                self.joint_inner_tolerance(merit);
+                self.joint_inner_tolerance(self.joint.settle);
                 // 0: the step's own active set, 1: trying the full step's, 2: tried
                 let mut switched = 0u8;
                 let mut alpha = 1.0;
@@ -393,18 +407,33 @@ impl TendonWorkspace {
         Err(first_step)
     }
 
-    /// Settle tolerance of the next passes from the merit of the current iterate
-    /// (0: fully settled, `LOCAL_TOL`): `1e-7` of its residual `merit * tol` as a
-    /// fraction of the rod length (the boundary residual moves by ~100-1000 times a
+    /// Settle tolerance of the next passes from the residual of the current iterate
+    /// (0: fully settled, `LOCAL_TOL`): `1e-7` of its residual `residual`
+    /// (`JointBufs::settle`: `max(|r|, w |G|)`) as a fraction of the
+    /// rod length (the boundary residual moves by ~100-1000 times a
     /// scaled hole error, so the inner error stays 1e-5..1e-4 of the outer residual;
     /// near convergence the clamp makes it `LOCAL_TOL`). Measured on the 443 FTDCR v4
     /// val rows (f64 / dual RHS a row): 1e-9 3354 / 192, 1e-8 3095 / 192, 1e-7 2885 /
     /// 195; before the adaptive continuation steps, 1e-10 (the shooting Newton's rule)
     /// 4449 / 246, 1e-8 4027 / 248, 1e-6 4256 / 284 (there the noise starts to fail
     /// the chord steps' contraction test, which costs sweeps).
-    fn joint_inner_tolerance(&mut self, merit: f64) {
-        let tol = self.ws.report().tolerance;
-        self.joint.inner_tol = self.ws.set_local_tolerance(1e-7 * merit * tol);
+    fn joint_inner_tolerance(&mut self, residual: f64) {
+        self.joint.inner_tol = self.ws.set_local_tolerance(1e-7 * residual);
+    }
+
+    /// `(l2, settle)` of the residual `[r; G]` in `f_now` (see [`JointBufs`]). `G`
+    /// is weighed against the settings' shooting tolerance, not this solve's `tol`
+    /// (which the residual floor may raise), as the tolerances' ratio did.
+    fn joint_norms(&self, tol: f64) -> (f64, f64) {
+        let n = self.joint.x.len();
+        let (r, g) = self.joint.f_now.split_at(n);
+        let w = tol / (MERIT_G_UNIT_M * self.ws.settings().tolerance);
+        let (mut sum, mut top) = (0.0, 0.0f64);
+        for v in r.iter().copied().chain(g.iter().map(|g| g * w)) {
+            sum += v * v;
+            top = top.max(v.abs());
+        }
+        (sum.sqrt() / tol, top)
     }
 
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
@@ -423,17 +452,10 @@ impl TendonWorkspace {
         self.update_g();
         let tol = self.ws.report().tolerance;
         let tol_g = self.settings.tolerance_m;
-        let r2: f64 = self
-            .ws
-            .residual_vector()
-            .iter()
-            .map(|r| (r / tol).powi(2))
-            .sum();
-        let g2: f64 = self.g.iter().map(|g| (g / tol_g).powi(2)).sum();
         let n = self.joint.x.len();
         self.joint.f_now[..n].copy_from_slice(self.ws.residual_vector());
         self.joint.f_now[n..].copy_from_slice(&self.g);
-        self.joint.l2 = (r2 + g2).sqrt();
+        (self.joint.l2, self.joint.settle) = self.joint_norms(tol);
         Some((res / tol).max(self.merit() / tol_g))
     }
 

@@ -134,12 +134,11 @@ impl TendonWorkspace {
         let tol = self.ws.report().tolerance;
         let tol_g = self.settings.tolerance_m;
         let g_max = self.merit();
+        self.joint.f_now[n..].copy_from_slice(&self.g);
+        let (l2_0, settle0) = self.joint_norms(tol);
         let jb = &mut self.joint;
-        jb.f_now[n..].copy_from_slice(&self.g);
-        let r2: f64 = jb.f_now[..n].iter().map(|r| (r / tol).powi(2)).sum();
-        let g2: f64 = self.g.iter().map(|g| (g / tol_g).powi(2)).sum();
-        let l2_0 = (r2 + g2).sqrt();
         jb.l2 = l2_0;
+        jb.settle = settle0;
         let r_max = jb.f_now[..n].iter().fold(0.0f64, |a, r| a.max(r.abs()));
         let merit0 = (r_max / tol).max(g_max / tol_g);
         if merit0 <= 1.0 && self.taut.iter().zip(&self.t).all(|(k, t)| *k || *t == 0.0) {
@@ -162,7 +161,7 @@ impl TendonWorkspace {
         }
         // the next holes settle to 1e-7 of the residual the point is expected to
         // have: the start's times the last prediction's ratio (`joint.pred_ratio`)
-        self.joint_inner_tolerance(merit0 * self.joint.pred_ratio);
+        self.joint_inner_tolerance(settle0 * self.joint.pred_ratio);
         let ev = self.joint_evaluate();
         self.joint.pred_ratio = (self.joint.l2 / l2_0).clamp(1e-9, 1.0);
         match ev {
