@@ -101,6 +101,61 @@ fn arc_keeps_the_ftdcr_val_error_of_the_stored_calibration() {
     );
 }
 
+/// The readings ladder (`cablesense pareto`, `solve --model auto`) offers the arc
+/// coupling on a robot with disks: one `/arc` twin of each fixed-step rod rung, none
+/// of the adaptive one. Solved as readings models over the first 40 FTDCR v4 val
+/// rows (warm, in order), a twin's tips stay within 2e-4 m of its condensed rung's
+/// (measured on the 443 rows with the scene's settings: at most 84 um).
+#[test]
+fn the_readings_ladder_offers_arc_twins_of_the_fixed_step_rod_rungs() {
+    use cablesense::ladder::{readings_ladder, Rung};
+    use cablesense::{Integrator, Start};
+    let scene = Scene::load(format!("{DIR}/data/scenes/ftdcr_v4.toml")).unwrap();
+    let robot = scene.build_robot().unwrap();
+    let ladder = readings_ladder(&robot);
+    let rk4 = |r: &Rung| matches!(r.solver_settings(), Some(s) if matches!(s.integrator, Integrator::Rk4 { .. }));
+    let arcs: Vec<&Rung> = ladder
+        .iter()
+        .filter(|r| r.label().ends_with("/arc"))
+        .collect();
+    let fixed = ladder
+        .iter()
+        .filter(|r| rk4(r) && !r.label().ends_with("/arc"));
+    assert_eq!(arcs.len(), fixed.count());
+    assert!(arcs
+        .iter()
+        .all(|r| rk4(r) && r.solver_settings().unwrap().cable_coupling == CableCoupling::Arc));
+    // a twin against its condensed rung
+    let arc = arcs
+        .iter()
+        .find(|r| r.label() == "cosserat/point/rk4-8/arc")
+        .expect("the twin of cosserat/point/rk4-8");
+    let cond = ladder
+        .iter()
+        .find(|r| r.label() == "cosserat/point/rk4-8")
+        .unwrap();
+    let mut a = arc.build_readings(&robot, &scene.loads).unwrap();
+    let mut c = cond.build_readings(&robot, &scene.loads).unwrap();
+    let tw = scene.tendon_workspace().unwrap();
+    let mut parser = scene.readings_parser(&tw);
+    let text = std::fs::read_to_string(format!("{DIR}/data/hardware/ftdcr_v4/val.csv")).unwrap();
+    let rows = text
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| parser.line(i + 1, l).ok().flatten())
+        .take(40);
+    let mut worst = 0.0f64;
+    for row in rows {
+        for m in [&mut a, &mut c] {
+            let rep = m.solve_readings(&row.readings_m, Start::Warm).unwrap();
+            assert!(rep.status.is_converged(), "{rep:?}");
+        }
+        worst = worst.max((a.tip_position() - c.tip_position()).norm());
+    }
+    println!("arc twin against condensed, 40 val rows: {worst:.3e} m at most");
+    assert!(worst < 2e-4, "{worst:e} m");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 3, ..ProptestConfig::default() })]
 

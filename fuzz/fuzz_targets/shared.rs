@@ -19,8 +19,8 @@
 
 use cablesense::robot::{BaseSpec, CableSpec, GuideSpec, HolesSpec, SectionSpec};
 use cablesense::{
-    CrossSection, Frame, GuideMass, Integrator, Loads, Material, PointLoad, Robot, RobotSpec,
-    RodModel, Scene, SolveStatus, SolverSettings, Start, Workspace,
+    CableCoupling, CrossSection, Frame, GuideMass, Integrator, Loads, Material, PointLoad, Robot,
+    RobotSpec, RodModel, Scene, SolveStatus, SolverSettings, Start, Workspace,
 };
 
 /// Solves are skipped for scenes larger than this (parsing and validation still run):
@@ -80,7 +80,7 @@ pub fn scene_json(data: &[u8]) {
 
 /// `forward_solve` target on raw bytes (what the regression test replays).
 pub fn forward_solve(data: &[u8]) {
-    check_forward(&ForwardInput::from_bytes(data));
+    check_forward(&ForwardInput::from_solve_bytes(data));
 }
 
 /// A validated scene: build the robot, cap the budget, solve cold, check the result.
@@ -211,6 +211,13 @@ const FORWARD_MAX_CONTINUATION_STEPS: u8 = 3;
 /// longer input ignored past this length.
 pub const FORWARD_INPUT_BYTES: usize = 2 * 48 + 8;
 
+/// Bytes of a `forward_solve` input: a [`ForwardInput`], then one byte choosing the
+/// cable coupling (`numerics.cable_coupling`: condensed, arc, exact). The byte is past
+/// [`FORWARD_INPUT_BYTES`], so the inputs of the other targets that embed a
+/// `ForwardInput` keep their layout, and the corpora written before it (104 bytes,
+/// the extra byte read as zero) replay with the default coupling, as they ran.
+pub const FORWARD_SOLVE_BYTES: usize = FORWARD_INPUT_BYTES + 1;
+
 /// Typed input of the `forward_solve` target: every number already mapped into a
 /// physically bounded range, so an `Err` from the library means a real rejection
 /// rather than garbage in.
@@ -276,6 +283,18 @@ impl<'a> Reader<'a> {
 }
 
 impl ForwardInput {
+    /// Decode a `forward_solve` input ([`FORWARD_SOLVE_BYTES`]): [`Self::from_bytes`]
+    /// and the cable coupling.
+    pub fn from_solve_bytes(data: &[u8]) -> Self {
+        let mut input = Self::from_bytes(data);
+        input.settings.cable_coupling = match Reader::new(data, FORWARD_INPUT_BYTES).choice(3) {
+            0 => CableCoupling::Condensed,
+            1 => CableCoupling::Arc,
+            _ => CableCoupling::Exact,
+        };
+        input
+    }
+
     /// Decode (see [`FORWARD_INPUT_BYTES`]). Every byte string is a valid input.
     pub fn from_bytes(data: &[u8]) -> Self {
         let data = &data[..data.len().min(FORWARD_INPUT_BYTES)];

@@ -49,7 +49,7 @@ pub use rod::RodRung;
 use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::robot::Robot;
-use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
+use crate::settings::{CableCoupling, GuideMass, Integrator, RodModel, SolverSettings};
 use crate::statics::{ParamSite, Pose, SolveStatus, Start};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -225,7 +225,9 @@ impl Rung {
     }
 
     /// Short label, e.g. `cc`, `pcc/point/8`, `kirchhoff/average/rk4-16`,
-    /// `cosserat/accurate/adaptive-1e-8`.
+    /// `cosserat/accurate/adaptive-1e-8`; a rod rung whose cable coupling is not the
+    /// default (`condensed`) ends in `/arc` or `/exact`
+    /// (`cosserat/point/rk4-10/arc`).
     pub fn label(&self) -> String {
         match self {
             Self::ConstantCurvature(_) => "cc".into(),
@@ -245,7 +247,12 @@ impl Rung {
                     Integrator::Rk4 { steps_per_section } => format!("rk4-{steps_per_section}"),
                     Integrator::Adaptive { tol, .. } => format!("adaptive-{tol:.0e}"),
                 };
-                format!("{model}/{}/{int}", guide_mass_name(s.guide_mass))
+                let coupling = match s.cable_coupling {
+                    CableCoupling::Condensed => "",
+                    CableCoupling::Arc => "/arc",
+                    CableCoupling::Exact => "/exact",
+                };
+                format!("{model}/{}/{int}{coupling}", guide_mass_name(s.guide_mass))
             }
         }
     }

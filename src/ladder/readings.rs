@@ -17,6 +17,7 @@ use super::{CcSettings, ConstantCurvature, LadderError, LadderReport, PccSetting
 use super::{PiecewiseConstantCurvature, Rung};
 use crate::loads::Loads;
 use crate::robot::Robot;
+use crate::settings::{CableCoupling, Integrator, SolverSettings};
 use crate::statics::Start;
 use crate::tendons::TendonWorkspace;
 use nalgebra::Vector3;
@@ -137,7 +138,12 @@ fn zeros(robot: &Robot) -> Vec<f64> {
 /// setting of [`super::auto_ladder`] (RK4 4..64 steps per section and adaptive 1e-8,
 /// each guide-mass model) through the tendon solve: a tendon solve is a Newton
 /// iteration of shooting solves, so the finer adaptive settings of the full ladder
-/// would dominate the sweep's time without adding a point to the front.
+/// would dominate the sweep's time without adding a point to the front. On a robot
+/// with disks, each RK4 rod setting also with the arc coupling (label `.../arc`,
+/// [`CableCoupling::Arc`]): the cheaper disk coupling of a tendon robot (on the FTDCR
+/// v4 val rows 0.61x the instructions of the default coupling, tips within 84 um of
+/// it; `tests/arc_coupling.rs`). Not with the adaptive setting: its steps, not the
+/// coupling, set its cost.
 pub fn readings_ladder(robot: &Robot) -> Vec<Rung> {
     let mut out = Vec::new();
     let curvature = super::reject_continuous(robot).is_ok();
@@ -151,10 +157,25 @@ pub fn readings_ladder(robot: &Robot) -> Vec<Rung> {
             ..PccSettings::default()
         }));
     }
-    out.extend(
-        super::auto_ladder(robot)
-            .into_iter()
-            .filter(|r| matches!(r, Rung::Rod(_))),
-    );
+    let rods: Vec<Rung> = super::auto_ladder(robot)
+        .into_iter()
+        .filter(|r| matches!(r, Rung::Rod(_)))
+        .collect();
+    // the arc coupling's twins of the fixed-step rod rungs, when tendons pass disks
+    let disks = !robot.guides().is_empty();
+    let arcs: Vec<Rung> = rods
+        .iter()
+        .filter_map(|r| match r {
+            Rung::Rod(s) if disks && matches!(s.integrator, Integrator::Rk4 { .. }) => {
+                Some(Rung::Rod(SolverSettings {
+                    cable_coupling: CableCoupling::Arc,
+                    ..s.clone()
+                }))
+            }
+            _ => None,
+        })
+        .collect();
+    out.extend(rods);
+    out.extend(arcs);
     out
 }
