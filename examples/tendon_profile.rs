@@ -10,6 +10,11 @@
 use cablesense::Scene;
 use std::time::Instant;
 
+/// The environment variable `name` parsed as a `T`, if set and valid.
+fn env_parse<T: std::str::FromStr>(name: &str) -> Option<T> {
+    std::env::var(name).ok().and_then(|v| v.parse().ok())
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let scene_path = args.get(1).map_or("data/scenes/ftdcr_v4.toml", |s| s);
@@ -28,18 +33,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
     }
     // TOL=x: the shooting tolerance (scaled) instead of the scene's
-    if let Some(tol) = std::env::var("TOL")
-        .ok()
-        .and_then(|v| v.parse::<f64>().ok())
-    {
+    if let Some(tol) = env_parse::<f64>("TOL") {
         scene.numerics.tolerance = tol;
     }
     let mut ws = scene.tendon_workspace()?;
     // TOL_M=x: the tendon tolerance (m) instead of the default
-    if let Some(tol) = std::env::var("TOL_M")
-        .ok()
-        .and_then(|v| v.parse::<f64>().ok())
-    {
+    if let Some(tol) = env_parse::<f64>("TOL_M") {
         ws.set_tendon_settings(cablesense::tendons::TendonSettings {
             tolerance_m: tol,
             ..Default::default()
@@ -54,10 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     // KHZ=N: the first N ticks of the control loop at 1 kHz instead (the readings
     // linearly interpolated in time between the rows; `tendon_control_tick_1khz`)
-    if let Some(n) = std::env::var("KHZ")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-    {
+    if let Some(n) = env_parse::<usize>("KHZ") {
         let mut ticks = Vec::with_capacity(n);
         let (mut k, mut t) = (0, rows[0].t_s.unwrap_or(0.0));
         while ticks.len() < n && k + 1 < rows.len() {

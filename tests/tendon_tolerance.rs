@@ -11,12 +11,17 @@
 //! - every row converges on the joint path (no shooting solve of the nested method);
 //! - a looser tolerance costs at most the default's forward passes in all (a count,
 //!   not a time);
-//! - the tips stay within the looser tolerance's reach of the default's: 1e-6 m
-//!   (measured on the 443 val rows: at most 4.9e-9 m at 1e-9 m with the shooting
-//!   tolerance 1e-7, 5.9e-12 m at 1e-9 m alone).
+//! - the tips stay within the looser tolerance's reach of the default's:
+//!   [`TIP_PER_TENDON`] times the tolerance (measured on the 443 val rows: at most
+//!   4.9e-9 m at 1e-9 m with the shooting tolerance 1e-7, 5.9e-12 m at 1e-9 m alone).
 
 use cablesense::tendons::TendonSettings;
 use cablesense::Scene;
+
+/// Tip motion per unit of tendon length, with a margin: on this robot a 2.45 mm pull
+/// swings the tip 61-69 mm (issue 9), about 28 mm a mm, so a tendon mismatch within
+/// the tolerance moves the tip by about 28 times it at most; bounded here by 100.
+const TIP_PER_TENDON: f64 = 100.0;
 
 /// Tips (m) and the total of forward passes of the first `rows` val rows, solved
 /// warm in sequence at the tendon tolerance `tol_m`.
@@ -73,7 +78,7 @@ fn a_looser_tendon_tolerance_keeps_warm_rows_on_the_joint_path() {
         for (k, (a, b)) in tips.iter().zip(&tips0).enumerate() {
             let d = (a - b).norm();
             assert!(
-                d <= 1e-6,
+                d <= TIP_PER_TENDON * tol,
                 "tol {tol}: row {k}: tip {d:e} m from the default's"
             );
         }

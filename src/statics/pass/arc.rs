@@ -240,12 +240,11 @@ pub(super) fn guide_chords<T: Real>(
                 continue;
             }
             let key = c.gap[k];
-            if gap.as_ref().is_none_or(|(kk, _)| *kk != key) {
-                gap = Some((key, predict_gap(key.0, &plan.coeffs[key.1], &nl, &mlp)));
+            if gap.as_ref().is_some_and(|(kk, _)| *kk != key) {
+                gap = None;
             }
-            let Some((_, gp)) = gap.as_ref() else {
-                continue;
-            };
+            let (_, gp) = gap
+                .get_or_insert_with(|| (key, predict_gap(key.0, &plan.coeffs[key.1], &nl, &mlp)));
             let rho = &c.hole_local[k];
             let d = gp.tau + mat_vec_f64(&gp.e, &c.hole_local[k + 1]) - v3::<T>(rho);
             // t d / |d| (as `unit(d) * t`, with one product fewer per component)

@@ -116,10 +116,8 @@ pub(super) struct JointBufs {
     pub(super) free_prev: Vec<f64>,
     free_row: Vec<f64>,
     /// `|| [r; w G] ||_2 / tol` at the last evaluation (line-search merit; `w` from
-    /// [`MERIT_G_UNIT_M`], `TendonWorkspace::joint_norms`), and the same vector's
-    /// largest component (`settle`: what the next passes' settle tolerance follows).
+    /// [`MERIT_G_UNIT_M`], `TendonWorkspace::joint_norms`).
     l2: f64,
-    settle: f64,
     /// Settle tolerance of the inner passes now in effect (fraction of the length).
     inner_tol: f64,
     /// Row-to-row predictor (`predict` submodule): the solutions `[x; T]` of the
@@ -184,7 +182,6 @@ impl JointBufs {
             first_chord_ok: true,
             rows_fresh: 0,
             l2: f64::INFINITY,
-            settle: f64::INFINITY,
             inner_tol: LOCAL_TOL,
             hist_z: vec![0.0; predict::HISTORY * (n + p)],
             hist_f: vec![0.0; predict::HISTORY * p],
@@ -349,7 +346,8 @@ impl TendonWorkspace {
                 }
                 // inexact inner solves while far away (as the shooting Newton does):
                 // the trial's next holes settle to 1e-7 of the iterate's residual
-                self.joint_inner_tolerance(self.joint.settle);
+                let settle = self.joint_norms(self.ws.report().tolerance).1;
+                self.joint_inner_tolerance(settle);
                 // 0: the step's own active set, 1: trying the full step's, 2: tried
                 let mut switched = 0u8;
                 let mut alpha = 1.0;
@@ -409,7 +407,7 @@ impl TendonWorkspace {
 
     /// Settle tolerance of the next passes from the residual of the current iterate
     /// (0: fully settled, `LOCAL_TOL`): `1e-7` of its residual `residual`
-    /// (`JointBufs::settle`: `max(|r|, w |G|)`) as a fraction of the
+    /// (`max(|r|, w |G|)`, [`Self::joint_norms`]) as a fraction of the
     /// rod length (the boundary residual moves by ~100-1000 times a
     /// scaled hole error, so the inner error stays 1e-5..1e-4 of the outer residual;
     /// near convergence the clamp makes it `LOCAL_TOL`). Measured on the 443 FTDCR v4
@@ -421,7 +419,9 @@ impl TendonWorkspace {
         self.joint.inner_tol = self.ws.set_local_tolerance(1e-7 * residual);
     }
 
-    /// `(l2, settle)` of the residual `[r; G]` in `f_now` (see [`JointBufs`]). `G`
+    /// `(l2, settle)` of the residual `[r; G]` in `f_now`: the line-search merit
+    /// (`JointBufs::l2`) and the largest component of `[r; w G]` (what the next
+    /// passes' settle tolerance follows). `G`
     /// is weighed against the settings' shooting tolerance, not this solve's `tol`
     /// (which the residual floor may raise), as the tolerances' ratio did.
     fn joint_norms(&self, tol: f64) -> (f64, f64) {
@@ -455,7 +455,7 @@ impl TendonWorkspace {
         let n = self.joint.x.len();
         self.joint.f_now[..n].copy_from_slice(self.ws.residual_vector());
         self.joint.f_now[n..].copy_from_slice(&self.g);
-        (self.joint.l2, self.joint.settle) = self.joint_norms(tol);
+        self.joint.l2 = self.joint_norms(tol).0;
         Some((res / tol).max(self.merit() / tol_g))
     }
 

@@ -138,7 +138,6 @@ impl TendonWorkspace {
         let (l2_0, settle0) = self.joint_norms(tol);
         let jb = &mut self.joint;
         jb.l2 = l2_0;
-        jb.settle = settle0;
         let r_max = jb.f_now[..n].iter().fold(0.0f64, |a, r| a.max(r.abs()));
         let merit0 = (r_max / tol).max(g_max / tol_g);
         if merit0 <= 1.0 && self.taut.iter().zip(&self.t).all(|(k, t)| *k || *t == 0.0) {
