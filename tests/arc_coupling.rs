@@ -17,7 +17,7 @@
 //!   `tests/tendon_derivatives.rs` checks the condensed coupling's (same steps and
 //!   tolerances; the pass is explicit here, so nothing settles inside it).
 
-mod common;
+use crate::common;
 
 use cablesense::calibrate::Recording;
 use cablesense::nalgebra::Vector3;

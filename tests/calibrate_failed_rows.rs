@@ -11,7 +11,7 @@
 //! rejected); more failed rows than `max_failed_fraction` end with
 //! `TooManyFailedRows` and no step.
 
-mod calibrate_common;
+use crate::calibrate_common;
 use calibrate_common::*;
 
 use cablesense::calibrate::{

@@ -5,7 +5,7 @@
 //! `E d^4` (direction E: +1, d: -1/4; tolerance 5 % on the ratio); (c) the statistics
 //! on a hand-made Jacobian with two nearly equal columns (correlation > 0.98).
 
-mod calibrate_common;
+use crate::calibrate_common;
 use calibrate_common::*;
 
 use cablesense::calibrate::{

@@ -4,7 +4,7 @@
 //! 1e-2 at d = 1e-3 x, where the second-order term is ~1e-3); the central/forward
 //! check must stay quiet there (< 1e-3) and must flag a model with a kink.
 
-mod calibrate_common;
+use crate::calibrate_common;
 use calibrate_common::*;
 
 use cablesense::calibrate::{

@@ -4,7 +4,7 @@
 //! the spread ratio, ~1000) and reported as a unit mismatch. BOM, CRLF, comments and
 //! JSON lines are read. The scene's `[calibration]` table rejects unknown keys.
 
-mod calibrate_common;
+use crate::calibrate_common;
 use calibrate_common::*;
 
 use cablesense::calibrate::{

@@ -4,7 +4,7 @@
 //! lie within 2 reported standard errors of the truth (a consistent fit gives ~95 %),
 //! and the residual variance factor is near 1 (0.5-2: the stated noise is right).
 
-mod calibrate_common;
+use crate::calibrate_common;
 use calibrate_common::*;
 
 use cablesense::calibrate::{

@@ -6,6 +6,7 @@
 //! tests of a file on parallel threads. The on/off flag is thread-local as well,
 //! so the harness's own threads are never counted.
 
+mod common;
 mod estimate_common;
 
 use cablesense::estimate::{EstimateSpec, EstimateStatus, Method};

@@ -5,7 +5,7 @@
 //! `estimate_roundtrip.rs`: `1e-8 N + 1e-6` relative (forward residual `1e-10`,
 //! estimator step tolerance `1e-10`).
 
-mod estimate_common;
+use crate::estimate_common;
 
 use cablesense::estimate::{Axis, EstimateSpec, EstimateStatus, Estimator, Method, UnknownSpec};
 use cablesense::{Loads, RodModel, SolverSettings};

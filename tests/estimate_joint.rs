@@ -11,6 +11,7 @@
 //!   scaled shooting residual, re-evaluated through the public API, is below the
 //!   forward solver's `tolerance` (1e-10 by default).
 
+mod common;
 mod estimate_common;
 
 use cablesense::estimate::{EstimateSpec, EstimateStatus, JointEstimator, Method};

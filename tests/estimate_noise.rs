@@ -18,7 +18,7 @@
 //! `~2e-4` N, while the sensitivities change by a factor ~2 over 0.3 N: the problem
 //! is linear to `~1e-3` relative over the noise and the chi-square law applies.
 
-mod estimate_common;
+use crate::estimate_common;
 
 use cablesense::estimate::{EstimateSpec, EstimateStatus, Method};
 use cablesense::nalgebra::DMatrix;

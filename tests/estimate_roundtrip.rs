@@ -27,7 +27,7 @@
 //! reused sensitivities with Broyden updates), cold-started at zero load; the
 //! fresh-sensitivity policy (`reuse_jacobian = false`) is checked as well.
 
-mod estimate_common;
+use crate::estimate_common;
 
 use cablesense::estimate::{EstimateSpec, EstimateStatus, Estimator, Method};
 use cablesense::Solution;

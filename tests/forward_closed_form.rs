@@ -4,7 +4,7 @@
 //! properties in `common::props` (computed independently of `cablesense::rod`);
 //! each test states its tolerance and where the formula comes from.
 
-mod common;
+use crate::common;
 
 use cablesense::nalgebra::{Matrix3, Vector3};
 use cablesense::{

@@ -10,7 +10,7 @@
 //!   whole solution rigidly and leaves cable lengths unchanged.
 //! - A warm-started workspace solve agrees with a cold solve.
 
-mod common;
+use crate::common;
 
 use cablesense::nalgebra::{Matrix3, Vector3};
 use cablesense::{

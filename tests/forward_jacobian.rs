@@ -16,7 +16,7 @@
 //! inside the difference stencil moves the residual by ~1e-12, i.e. ~1e-6 in the
 //! difference quotient.
 
-mod common;
+use crate::common;
 
 use cablesense::nalgebra::Vector3;
 use cablesense::{

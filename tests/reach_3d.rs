@@ -7,7 +7,7 @@
 //! balance is exact: `n(0) = F`, `m(0) = (r(L) - r(0)) x F + tau`, thesis eqs. 2.6 and
 //! 2.11 integrated over the rod with the free-end conditions of table 2.1).
 
-mod common;
+use crate::common;
 
 use cablesense::nalgebra::{Matrix3, Vector3};
 use cablesense::{Frame, Loads, PointLoad, SolveStatus, SolverSettings, Start, Workspace};

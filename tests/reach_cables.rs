@@ -14,7 +14,7 @@
 //! `p_0` towards the base-plate hole. Hence `n(0) = F + sum T u` and
 //! `m(0) = (r(L) - r(0)) x F + sum (p_0 - r(0)) x T u`.
 
-mod common;
+use crate::common;
 
 use cablesense::nalgebra::Vector3;
 use cablesense::{Loads, PointLoad, Robot, SolveStatus, SolverSettings, Start, Workspace};

@@ -16,7 +16,7 @@
 //! written with the complementary modulus `p' = sqrt(1 - p^2)` (`1 - p^2 sin^2 eta =
 //! cos^2 eta + p'^2 sin^2 eta`) and `p'` is found by bisection on `ln p'`.
 
-mod common;
+use crate::common;
 
 use cablesense::nalgebra::Vector3;
 use cablesense::{Loads, RodModel, SolveStatus, SolverSettings, Start, Workspace};

@@ -8,7 +8,7 @@
 //! and `m(0) = (r(L) - r(0)) x R(L) F` (thesis eqs. 2.6 and 2.11 integrated over the
 //! rod with the free-end conditions of table 2.1).
 
-mod common;
+use crate::common;
 
 use cablesense::nalgebra::Vector3;
 use cablesense::{

@@ -18,7 +18,7 @@
 //! with a finite tip and a residual within the reported tolerance, or a failure status;
 //! never a panic. Tolerance: the solver's own (`converged` means residual <= the
 //! reported tolerance); source: this matrix's own full sweep, run with
-//! `cargo test --release --test settings_matrix -- --ignored --nocapture`
+//! `cargo test --release --test integration settings_matrix:: -- --ignored --nocapture`
 //! (it prints the table the README's is written from). On 2 busy shared cores, with
 //! `SETTINGS_MATRIX_LAMBDAS=0.25,0.5,1,2`, the thesis scenes, the track demo and the
 //! two-section demo took 8 minutes, `ftdcr_v4` 1 minute; `tdcr_modeling` spends 6 s

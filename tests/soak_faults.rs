@@ -28,7 +28,7 @@
 //! In CI: 20 000 cable-delta rows (track demo) and 300 servo-reading rows (the
 //! two-segment TDCR, 10 faults: every kind at least once). The full million-row
 //! soaks (cable deltas, servo readings) are `#[ignore]`d:
-//! `cargo test --release --test soak_faults -- --ignored --nocapture`
+//! `cargo test --release --test integration soak_faults:: -- --ignored --nocapture`
 //! (figures logged in `benches/README.md`).
 
 use serde_json::Value;
@@ -409,7 +409,7 @@ fn cable_deltas_20k_rows_with_faults() {
     );
 }
 
-/// The full soak: `cargo test --release --test soak_faults -- --ignored --nocapture`.
+/// The full soak: `cargo test --release --test integration soak_faults:: -- --ignored --nocapture`.
 #[test]
 #[ignore = "a million rows: 4-18 minutes on 2 shared cores; figures in benches/README.md"]
 fn cable_deltas_million_rows_with_faults() {
@@ -446,7 +446,7 @@ fn servo_stream(n: usize) -> Stream {
 }
 
 /// The full servo-readings soak (a million rows, 1 % faults in turn):
-/// `cargo test --release --test soak_faults servo_readings_million -- --ignored --nocapture`.
+/// `cargo test --release --test integration soak_faults::servo_readings_million -- --ignored --nocapture`.
 #[test]
 #[ignore = "a million tendon rows: about an hour of one core; figures in benches/README.md"]
 fn servo_readings_million_rows_with_faults() {

@@ -12,7 +12,7 @@
 //! exactly, Webster & Jones 2010 section 3.1.1), central differences for the exact
 //! derivatives, and each refusal's documented message.
 
-mod common;
+use crate::common;
 
 use cablesense::ladder::{CcSettings, PccSettings, Rung, TendonKinematics};
 use cablesense::nalgebra::Vector3;

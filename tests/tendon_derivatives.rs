@@ -23,7 +23,7 @@
 //! 1e-6 m/N, 1.3e-4 relative): the equilibrium test asks 1e-7 absolute + 1e-5
 //! relative at `1e-4` N.
 
-mod common;
+use crate::common;
 
 use cablesense::Scene;
 use cablesense::Start;

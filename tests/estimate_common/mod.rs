@@ -71,11 +71,10 @@ impl Tol {
 }
 
 // ---------------------------------------------------------------------------
-// Robots: the builders of tests/common/mod.rs, shared rather than copied.
+// Robots: the builders of tests/common/mod.rs, shared rather than copied (every
+// crate that declares `mod estimate_common` declares `mod common` beside it).
 
-#[path = "../common/mod.rs"]
-mod common;
-pub use common::{five_guide_robot, horizontal, two_section_robot_first_at};
+pub use crate::common::{five_guide_robot, horizontal, two_section_robot_first_at};
 
 /// [`five_guide_robot`] clamped horizontally: backbone along world +x, so gravity
 /// `[0, 0, -9.81]` acts across the rod.
