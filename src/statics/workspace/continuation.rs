@@ -3,6 +3,31 @@
 
 use super::*;
 
+/// Newton iterations a cold start gets before continuation takes over.
+const COLD_BUDGET: usize = 4;
+/// Newton iterations per continuation step.
+const CONTINUATION_BUDGET: usize = 10;
+
+/// Load intensity (see `intensity.rs`) above which a cold solve under loads outside
+/// Jacobi's test (tensioned cables, body-frame loads) is a branch-checked load
+/// continuation from the unloaded rod instead of a Newton from the straight rod. On the
+/// track demo a cold Newton lands on the continued branch up to 6 and on other
+/// equilibria from 7 (README "Where methods fail"): half of 6, for margin.
+pub const CERTIFY_INTENSITY: f64 = 3.0;
+/// Largest load-intensity increment of one step of the branch-checked continuation.
+const CERTIFY_STEP: f64 = 2.0;
+/// A branch-checked continuation step is rejected (and halved) when the corrector
+/// moves the unknowns more than this fraction of the secant predictor's own move.
+const CORRECTOR_RATIO: f64 = 0.5;
+/// A warm solve has left its branch when, after the first step `d1`, Newton still moved
+/// the unknowns by more than `WARM_JUMP_RATIO |d1| + WARM_JUMP_FLOOR` (scaled units,
+/// max norm): its tangent step no longer described where it went.
+const WARM_JUMP_RATIO: f64 = 1.0;
+const WARM_JUMP_FLOOR: f64 = 1e-3;
+/// A warm solve under world-fixed loads that moved the unknowns (scaled) or the tip
+/// (in units of L) by more than this also gets Jacobi's test.
+const WARM_CHECK_STEP: f64 = 0.05;
+
 impl Workspace {
     /// Cold solve: Newton from the straight rod (with Jacobi's test and continuation
     /// as fallback), or, for loads outside Jacobi's test above [`CERTIFY_INTENSITY`],

@@ -3,6 +3,11 @@
 
 use super::*;
 
+/// A reused (chord) Jacobian's full step must shrink `||r||_2` by this factor.
+const CHORD_CONTRACTION: f64 = 0.1;
+/// Chord steps allowed per Jacobian before it is refreshed anyway.
+const MAX_CHORD_STEPS: usize = 8;
+
 impl Workspace {
     /// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer
     /// directions with the plan's local directions, after making sure the assumed
