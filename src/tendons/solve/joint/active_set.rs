@@ -106,4 +106,55 @@ impl TendonWorkspace {
         }
         true
     }
+
+    /// The iterate's two branches of each tendon's NCP function (the stretch gap
+    /// `c_i T_i + L_f,i - l_i` and the slack arm `a_i T_i`), before a fresh step's
+    /// trials overwrite the lengths.
+    pub(super) fn joint_save_branches(&mut self) {
+        for i in 0..self.driven.len() {
+            let j = self.driven[i];
+            let m = &self.mech[i];
+            let (f, mf) = (self.free[i], self.mean_factor[i]);
+            self.joint.gap0[i] = m.covered(f, self.t[i], mf) - self.lengths[j];
+            self.joint.arm0[i] = (m.compliance(f, mf) + self.geo[i]) * self.t[i];
+        }
+    }
+
+    /// After a fresh step whose full-length trial changed the active set (and was
+    /// not accepted): the semi-smooth Newton step from the iterate with the trial's
+    /// active set, from the same sweep (the generalized Jacobian's rows of the
+    /// switched tendons exchanged, no new sweep). `false` (the step's own set
+    /// restored) when that Jacobian is singular or the step too long. Why: on the
+    /// FTDCR v4 val rows where a tendon goes slack within a row, the projected step
+    /// (a taut tendon's tension clamped at 0) raised the merit 14-50x and the
+    /// backtracking then crept along at 0.5-0.97 of it per fresh sweep until the
+    /// row was handed back.
+    pub(super) fn joint_switch_step(&mut self, n: usize, p: usize) -> bool {
+        let jb = &mut self.joint;
+        jb.sw_taut.copy_from_slice(&jb.lu_taut);
+        jb.sw_dz.copy_from_slice(&jb.dz);
+        jb.sw_f.copy_from_slice(&jb.f_prev);
+        jb.lu_taut.copy_from_slice(&self.taut);
+        if !self.joint_step_with_set(n, p) {
+            self.joint_unswitch();
+            return false;
+        }
+        let jb = &mut self.joint;
+        let dx_max = jb.dz[..n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
+        if !dx_max.is_finite() || dx_max > jb.max_step {
+            self.joint_unswitch();
+            return false;
+        }
+        true
+    }
+
+    /// Undo [`Self::joint_switch_step`]: the step, residual and factorisation of the
+    /// step's own active set.
+    pub(super) fn joint_unswitch(&mut self) {
+        let jb = &mut self.joint;
+        jb.lu_taut.copy_from_slice(&jb.sw_taut);
+        jb.dz.copy_from_slice(&jb.sw_dz);
+        jb.f_prev.copy_from_slice(&jb.sw_f);
+        self.joint_assemble();
+    }
 }
