@@ -195,6 +195,23 @@ pub struct Estimate {
     pub elapsed_s: f64,
 }
 
+impl Estimate {
+    /// Whether this estimate must not warm-start the next sample of a stream: the
+    /// solver stalled or the forward model failed (not trusted), or the fit is
+    /// [`Fit::Poor`] (the data contradict the model: a corrupted reading). A stream
+    /// then starts its next sample from the reference instead (`cablesense track`
+    /// and the load-cell stream of `cablesense estimate` do). `MaxIterations` and
+    /// `TimeBudget` estimates are the best so far and stay the warm start (a control
+    /// loop with a tight budget would otherwise never move); `NoData` keeps the
+    /// previous estimate.
+    pub fn poisons_warm_start(&self) -> bool {
+        matches!(
+            self.status,
+            EstimateStatus::Stalled | EstimateStatus::ForwardFailed
+        ) || self.fit == Fit::Poor
+    }
+}
+
 /// Estimator: allocate once, then [`Estimator::tick`] per sample without allocating
 /// (methods other than `argmin_gauss_newton` and `constrained`).
 ///

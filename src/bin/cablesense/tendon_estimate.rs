@@ -101,14 +101,6 @@ fn row_text(row: &ReadingRow, e: &TendonEstimate) -> String {
     )
 }
 
-/// Whether a row's estimate must not warm-start the next row (as in `track`).
-fn poisons_warm_start(e: &TendonEstimate) -> bool {
-    matches!(
-        e.estimate.status,
-        EstimateStatus::Stalled | EstimateStatus::ForwardFailed
-    ) || e.estimate.fit == Fit::Poor
-}
-
 /// Stream `reader` through the scene's load estimator; returns (rows estimated,
 /// rows not converged or poorly fitted, bad rows).
 pub fn stream(
@@ -167,7 +159,7 @@ pub fn stream(
         }
         let e = est.estimate();
         rows += 1;
-        let fallback = poisons_warm_start(&e);
+        let fallback = e.estimate.poisons_warm_start();
         if fallback {
             est.estimator().set_theta(&start);
         }

@@ -107,7 +107,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 // a row that stalls, fails or fits poorly must not become the next
                 // row's warm start: roll back to the state this row started from
                 // (the last good one); `"fallback": true` says so
-                let fallback = poisons_warm_start(&e);
+                let fallback = e.poisons_warm_start();
                 if fallback {
                     est.clone_from(&good);
                 } else {
@@ -134,17 +134,4 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         crate::plot_track::write(dir, &scene_path, &mut est, tips)?;
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// Whether an estimate must not warm-start the next row: the solver stalled or the
-/// forward model failed (the README: "not trusted"), or the fit is poor (the data
-/// contradict the model: a corrupted reading). `max_iterations` and `time_budget`
-/// estimates are the best so far and stay the warm start (a control loop with a
-/// tight budget would otherwise never move); `no_data` keeps the previous estimate.
-fn poisons_warm_start(e: &cablesense::estimate::Estimate) -> bool {
-    use cablesense::estimate::{EstimateStatus, Fit};
-    matches!(
-        e.status,
-        EstimateStatus::Stalled | EstimateStatus::ForwardFailed
-    ) || e.fit == Fit::Poor
 }
