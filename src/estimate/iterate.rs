@@ -17,6 +17,16 @@ const MAX_UNCERTIFIED_REUSE: usize = 4;
 impl<M: EstimationModel> Estimator<M> {
     /// Gradient and Gauss-Newton Hessian at the current point into `grad`, `h`.
     pub(super) fn normal_equations(&mut self) {
+        // (`len` lent out for the call, no allocation: `take` leaves an empty vector)
+        let len = std::mem::take(&mut self.len);
+        self.normal_equations_at(&len);
+        self.len = len;
+    }
+
+    /// Gradient and Gauss-Newton Hessian into `grad`, `h` with the sensitivities
+    /// `g` and the cable lengths `len` (the joint estimator's are those after the
+    /// Newton correction of the shape, `joint/model.rs`).
+    pub(super) fn normal_equations_at(&mut self, len: &[f64]) {
         let (p, c) = (self.p, self.c);
         self.h.iter_mut().for_each(|x| *x = 0.0);
         for k in 0..p {
@@ -29,7 +39,7 @@ impl<M: EstimationModel> Estimator<M> {
             if w == 0.0 {
                 continue;
             }
-            let r = self.len[j] - self.ref_len[j] - self.meas[j];
+            let r = len[j] - self.ref_len[j] - self.meas[j];
             for a in 0..p {
                 let ga = self.g[j * p + a];
                 self.grad[a] += w * ga * r;

@@ -145,25 +145,7 @@ pub(super) fn linearise(est: &mut Estimator, st: &mut JointState) -> Result<(), 
     est.g_valid = true;
     est.g_exact = true;
     // reduced normal equations: residual l~ - l_ref - m, Jacobian G
-    est.h.iter_mut().for_each(|v| *v = 0.0);
-    for k in 0..p {
-        est.grad[k] = est.prior_w[k] * (est.theta[k] - est.prior_mean[k]);
-        est.h[k * p + k] = est.prior_w[k];
-    }
-    for j in 0..c {
-        let wj = est.wts[j];
-        if wj == 0.0 {
-            continue;
-        }
-        let e = st.lt[j] - est.ref_len[j] - est.meas[j];
-        for a in 0..p {
-            let ga = est.g[j * p + a];
-            est.grad[a] += wj * ga * e;
-            for b in 0..p {
-                est.h[a * p + b] += wj * ga * est.g[j * p + b];
-            }
-        }
-    }
+    est.normal_equations_at(&st.lt);
     Ok(())
 }
 
