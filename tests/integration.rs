@@ -1,5 +1,5 @@
 //! The integration tests in one test binary (`cargo test --release --test
-//! integration`; one file with `cargo test --release --test integration ladder::`).
+//! integration`; one file with `cargo test --release --test integration thesis_tables::`).
 //!
 //! Why one binary: each test crate compiles its own copies of the library's generic
 //! code and links the library on its own; as 55 crates they took 144 s of a 2-core
