@@ -14,14 +14,13 @@
 mod common;
 mod estimate_common;
 
+mod alloc_counter;
+use alloc_counter::allocations;
 use cablesense::estimate::{EstimateSpec, EstimateStatus, JointEstimator, Method};
 use cablesense::{Loads, Solution, Workspace};
 use estimate_common::*;
 use proptest::prelude::*;
 use proptest::test_runner::{FileFailurePersistence, TestCaseError};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 const LOADS: Tol = Tol {
     abs: 1e-8,
@@ -391,60 +390,19 @@ fn unobservable_status_matches_nested() {
 }
 
 // ---------------------------------------------------------------------------
-// No allocation per tick after warm-up (counting allocator, as in
-// tests/estimate_alloc.rs; the on/off flag is thread-local, so the other tests
-// of this file running on other threads are never counted).
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-}
-
-fn record() {
-    if COUNTING.try_with(Cell::get).unwrap_or(false) {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-    }
-}
-
-// SAFETY: every call is forwarded unchanged to `System`.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        record();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        record();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        record();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
+// No allocation per tick after warm-up (the counting allocator of
+// tests/alloc_counter: its on/off flag is thread-local, so the other tests of this
+// file running on other threads are never counted).
 
 /// Problem (a): after 5 warm-up ticks, 60 ticks along a slowly varying tip force
 /// (every 7th with cable 1 missing, every 5th with per-cable sigma) allocate
 /// nothing, and every one converges to the truth.
 #[test]
 fn joint_ticks_do_not_allocate_after_warm_up() {
-    COUNTING.with(|c| c.set(true));
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    std::hint::black_box(vec![1u8; 10]);
-    COUNTING.with(|c| c.set(false));
-    assert_eq!(
-        ALLOCATIONS.load(Ordering::Relaxed) - before,
-        1,
-        "self-check"
-    );
+    let n = allocations(|| {
+        std::hint::black_box(vec![1u8; 10]);
+    });
+    assert_eq!(n, 1, "self-check");
 
     let pb = problem_a();
     let reference = pb.reference_lengths();
@@ -466,15 +424,13 @@ fn joint_ticks_do_not_allocate_after_warm_up() {
     }
     let mut status = [EstimateStatus::NoData; 60];
     let mut values = [[0.0; 2]; 60];
-    COUNTING.with(|c| c.set(true));
-    let a0 = ALLOCATIONS.load(Ordering::Relaxed);
-    for (i, (_, changes)) in samples[5..].iter().enumerate() {
-        let s = (i % 5 == 0).then_some(&sigma[..]);
-        status[i] = j.tick(changes, s);
-        values[i].copy_from_slice(j.theta());
-    }
-    let count = ALLOCATIONS.load(Ordering::Relaxed) - a0;
-    COUNTING.with(|c| c.set(false));
+    let count = allocations(|| {
+        for (i, (_, changes)) in samples[5..].iter().enumerate() {
+            let s = (i % 5 == 0).then_some(&sigma[..]);
+            status[i] = j.tick(changes, s);
+            values[i].copy_from_slice(j.theta());
+        }
+    });
     assert_eq!(count, 0, "{count} allocations in 60 joint ticks");
     for i in 0..60 {
         assert_eq!(status[i], EstimateStatus::Converged, "tick {i}");
