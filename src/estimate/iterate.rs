@@ -50,6 +50,21 @@ impl<M: EstimationModel> Estimator<M> {
         }
     }
 
+    /// Undamped Gauss-Newton predicted decrease of the cost from the current point
+    /// (`step` is left at the undamped step): LM's stationarity certificate.
+    pub(super) fn gn_predicted_decrease(&mut self) -> f64 {
+        let p = self.p;
+        self.solve_step(0.0);
+        let mut pred = 0.0;
+        for a in 0..p {
+            pred -= self.grad[a] * self.step[a];
+            for b in 0..p {
+                pred -= 0.5 * self.step[a] * self.h[a * p + b] * self.step[b];
+            }
+        }
+        pred
+    }
+
     /// `step = -(H + damping)^+ grad` by a Jacobi-scaled eigen pseudo-inverse:
     /// directions with relative eigenvalue below 1e-12 get no step (not invented).
     pub(super) fn solve_step(&mut self, damping: f64) {
@@ -195,14 +210,7 @@ impl<M: EstimationModel> Estimator<M> {
                     // negligible decrease (stationary point), else the cost could not
                     // be decreased from a non-stationary point: stalled
                     if method == Method::LevenbergMarquardt && self.mu > LM_MAX_CONVERGED_DAMPING {
-                        self.solve_step(0.0);
-                        let mut pred = 0.0;
-                        for a in 0..p {
-                            pred -= self.grad[a] * self.step[a];
-                            for b in 0..p {
-                                pred -= 0.5 * self.step[a] * self.h[a * p + b] * self.step[b];
-                            }
-                        }
+                        let pred = self.gn_predicted_decrease();
                         if pred > super::STATIONARY_DECREASE + 1e-9 * cost {
                             self.cost = cost;
                             return EstimateStatus::Stalled;

@@ -70,7 +70,7 @@ use std::time::Instant;
 
 // The merit, the pass and the linearised subproblem of one iteration.
 mod model;
-use model::{data_cost, eval, gn_predicted_decrease, l1, linearise, max_abs, model_cost};
+use model::{data_cost, eval, l1, linearise, max_abs, model_cost};
 // Chord steps on `r` with the factorisation at hand (polish, second-order correction).
 mod chord;
 use chord::{polish, restore};
@@ -286,7 +286,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
             }
             if small {
                 if est.mu > LM_MAX_CONVERGED_DAMPING
-                    && gn_predicted_decrease(est) > 1e-9 * (1.0 + f)
+                    && est.gn_predicted_decrease() > 1e-9 * (1.0 + f)
                 {
                     return conclude(est, st, EstimateStatus::Stalled);
                 }

@@ -169,18 +169,3 @@ pub(super) fn model_cost(est: &Estimator, st: &JointState, alpha: f64) -> f64 {
     }
     0.5 * cost
 }
-
-/// Undamped Gauss-Newton predicted decrease from the current point (LM's
-/// stationarity certificate, as in [`Estimator`]).
-pub(super) fn gn_predicted_decrease(est: &mut Estimator) -> f64 {
-    let p = est.p;
-    est.solve_step(0.0);
-    let mut pred = 0.0;
-    for a in 0..p {
-        pred -= est.grad[a] * est.step[a];
-        for b in 0..p {
-            pred -= 0.5 * est.step[a] * est.h[a * p + b] * est.step[b];
-        }
-    }
-    pred
-}
