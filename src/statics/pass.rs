@@ -21,7 +21,7 @@ mod small;
 
 use super::continuous;
 use super::plan::{Event, ParamSite, Plan};
-use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
+use crate::integrate::{dp45_step, rk4_step, ErrScale, State};
 use crate::math::Real;
 pub(crate) use buf::{PassBuf, PassError, Recording};
 pub use buf::{Pose, Sample};
@@ -386,17 +386,7 @@ fn after_rk4_step<T: Real>(
 }
 
 fn push_sample<T: Real>(r: &mut Recording, s: f64, y: &State<T>, c: &crate::integrate::Coeffs) {
-    let v = y.value();
-    let (vv, u) = strains(&v, c);
-    r.samples.push(Sample {
-        s,
-        r: v.r,
-        rotation: v.rot,
-        n: v.n,
-        m: v.m,
-        u,
-        v: vv,
-    });
+    r.samples.push(Sample::of(s, y, c));
 }
 
 trait ZerosT<T: Real> {

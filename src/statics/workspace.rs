@@ -37,7 +37,6 @@ mod predict;
 use predict::Secant;
 
 mod continuation;
-use continuation::CERTIFY_INTENSITY;
 mod multi;
 mod newton;
 mod output;

@@ -15,7 +15,7 @@
 //! function of that level only: a cold solve and a warm continuation ending at the
 //! same load integrate the same intervals and steps.
 
-use crate::integrate::{dp45_step, rk4_step, strains, ErrScale, State};
+use crate::integrate::{dp45_step, rk4_step, ErrScale, State};
 use crate::math::{mat_vec_f64, Real};
 use crate::settings::Integrator;
 use crate::statics::pass::{Pose, Recording, Sample};
@@ -312,21 +312,11 @@ pub(super) fn integrate<T: Real>(
 }
 
 fn push_sample<T: Real>(r: &mut Recording, s: f64, y: &State<T>, c: &crate::integrate::Coeffs) {
-    let v = y.value();
     // a node restarts at the arc length where the previous interval ended
     if r.samples.last().is_some_and(|l| l.s == s) {
         r.samples.pop();
     }
-    let (vv, u) = strains(&v, c);
-    r.samples.push(Sample {
-        s,
-        r: v.r,
-        rotation: v.rot,
-        n: v.n,
-        m: v.m,
-        u,
-        v: vv,
-    });
+    r.samples.push(Sample::of(s, y, c));
 }
 
 #[inline]
@@ -348,17 +338,10 @@ fn apply_event<T: Real>(
     nb: Option<&Nbr<T>>,
     rec: Option<&mut Rec>,
 ) {
-    let pose = |y: &State<T>| {
-        let v = y.value();
-        Pose {
-            position: v.r,
-            rotation: v.rot,
-        }
-    };
     match e {
         Event::SectionEnd(k) => {
             if let Some(r) = rec {
-                r.rec.section_tips[k] = pose(y);
+                r.rec.section_tips[k] = Pose::of(y);
             }
         }
         Event::Point(i) => {
@@ -390,7 +373,7 @@ fn apply_event<T: Real>(
             }
             if let Some(r) = rec {
                 let v = y.value();
-                r.rec.guides[g] = pose(y);
+                r.rec.guides[g] = Pose::of(y);
                 for &(j, k) in &plan.guide_cables[g] {
                     r.holes[j][k] = v.r + v.rot * plan.cables[j].hole_local[k];
                 }

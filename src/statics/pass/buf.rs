@@ -2,6 +2,7 @@
 //! ([`Recording`]: samples, disk and section-end poses).
 
 use super::{condensed, lowrank, LOCAL_TOL, SETTLE_TERMS};
+use crate::integrate::{strains, Coeffs, State};
 use crate::math::Real;
 #[cfg(doc)]
 use crate::statics::plan::ParamSite;
@@ -16,6 +17,17 @@ pub struct Pose {
     pub position: Vector3<f64>,
     /// Orientation; columns are the local x, y, z axes.
     pub rotation: Matrix3<f64>,
+}
+
+impl Pose {
+    /// The pose of a pass's state `y` (its values, without derivatives).
+    pub(crate) fn of<T: Real>(y: &State<T>) -> Self {
+        let v = y.value();
+        Self {
+            position: v.r,
+            rotation: v.rot,
+        }
+    }
 }
 
 /// The backbone at one arc length.
@@ -35,6 +47,24 @@ pub struct Sample {
     pub u: Vector3<f64>,
     /// Shear/stretch `v` (-), local.
     pub v: Vector3<f64>,
+}
+
+impl Sample {
+    /// The sample at arc length `s` of a pass's state `y`, with the strains of the
+    /// section coefficients `c`.
+    pub(crate) fn of<T: Real>(s: f64, y: &State<T>, c: &Coeffs) -> Self {
+        let v = y.value();
+        let (vv, u) = strains(&v, c);
+        Self {
+            s,
+            r: v.r,
+            rotation: v.rot,
+            n: v.n,
+            m: v.m,
+            u,
+            v: vv,
+        }
+    }
 }
 
 /// What a pass records when asked (f64 passes only).

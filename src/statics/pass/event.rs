@@ -22,17 +22,13 @@ pub(super) fn apply_event<T: Real>(
     match e {
         Event::SectionEnd(k) => {
             if let Some(r) = rec {
-                let v = y.value();
-                r.section_tips[k] = Pose {
-                    position: v.r,
-                    rotation: v.rot,
-                };
+                r.section_tips[k] = Pose::of(y);
             }
         }
         Event::Point(i) => {
             // n+ = n- - F, m+ = m- - tau (thesis 3.5.1 and 3.5.3: m(s+) = m(s-) - tau_st)
             let p = &plan.points[i];
-            let (mut f, tau) = if p.body {
+            let (mut f, mut tau) = if p.body {
                 (
                     mat_vec_f64(&y.rot, &p.force),
                     mat_vec_f64(&y.rot, &p.torque),
@@ -40,7 +36,6 @@ pub(super) fn apply_event<T: Real>(
             } else {
                 (v3::<T>(&p.force), v3::<T>(&p.torque))
             };
-            let mut tau = tau;
             f += v3::<T>(&(plan.gravity * p.mass));
             for &k in &plan.point_params[i] {
                 let th = buf.theta[k];
@@ -56,11 +51,7 @@ pub(super) fn apply_event<T: Real>(
         }
         Event::Guide(g) => {
             if let Some(r) = rec {
-                let v = y.value();
-                r.guides[g] = Pose {
-                    position: v.r,
-                    rotation: v.rot,
-                };
+                r.guides[g] = Pose::of(y);
             }
             if plan.point_guides {
                 y.n -= v3::<T>(&(plan.gravity * (plan.guide_mass[g] * load_scale)));

@@ -2,6 +2,7 @@
 //! predictor and the branch guard's checks), the cold path when that is not
 //! possible or fails, and the report.
 
+use super::continuation::CERTIFY_INTENSITY;
 use super::*;
 
 /// Largest change of load intensity a warm solve under loads outside Jacobi's test
