@@ -457,6 +457,7 @@ impl TendonWorkspace {
             slack: 0,
         };
         // the warm fast path (mu = 0, or friction factors that stay put)
+        self.joint.cold = start == Start::Cold;
         if start == Start::Warm
             && self.settings.joint_newton
             && self.solve_joint()

@@ -29,6 +29,7 @@
 
 use super::TendonWorkspace;
 use crate::math::DenseLu;
+use crate::settings::CableCoupling;
 use crate::statics::{SolveStatus, LOCAL_TOL};
 
 // The row's start: the previous row's residual without a pass, and a predictor.
@@ -50,15 +51,63 @@ pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
 /// start vouches for. On the FTDCR v4 recording consecutive rows step up to ~10
 /// (base force ~0.8 N against `EI/L^2` ~0.085 N).
 pub(super) const MAX_STEP: f64 = 100.0;
-/// While rows' first chord steps fail, every this many rows one tries it again.
+/// While rows' first chord steps fail, every this many rows one tries it again
+/// ([`ChordPolicy::CONDENSED`]).
 const CHORD_PROBE: usize = 16;
-/// A reused (chord) Jacobian's step must shrink the merit by this factor. Why 0.5
-/// (was 0.1): a fresh Jacobian is one dual sweep over `Dual<21>`, about 15 `f64`
-/// passes (22 `f64` right-hand sides per dual one), and a Broyden step that halves
-/// the merit costs one pass; on the 443 FTDCR v4 val rows 0.5 cut the dual RHS per
-/// row 420 -> 345 for 6039 -> 6257 `f64` ones (0.9: 338 and 6296, about the same;
-/// always trying the chord at a row's start: 311 and 7286, worse).
-const CHORD_CONTRACTION: f64 = 0.5;
+
+/// How far a reused (chord) Jacobian is pushed before a fresh sweep: the right
+/// balance depends on what a sweep costs in `f64` passes, which the cable coupling
+/// sets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct ChordPolicy {
+    /// After a row whose first chord step failed, the next rows start with a fresh
+    /// Jacobian (one in [`CHORD_PROBE`] tries the chord again).
+    skip_after_failure: bool,
+    /// Trials of a chord step: the full step, then halved each time; a halved step
+    /// is accepted on Armijo's decrease (`1 - 1e-4 alpha`).
+    trials: usize,
+    /// A full chord step must shrink the merit by this factor.
+    contraction: f64,
+}
+
+impl ChordPolicy {
+    /// The policy of a cable coupling, for a warm or a cold row.
+    pub(super) fn of(coupling: CableCoupling, cold: bool) -> Self {
+        match coupling {
+            CableCoupling::Arc if !cold => Self::ARC,
+            _ => Self::CONDENSED,
+        }
+    }
+
+    /// Couplings whose passes settle the next holes (`condensed`, `exact`): a pass
+    /// costs about a fifth of a sweep, so a chord step that does not halve the merit
+    /// gives way to a fresh Jacobian. Why 0.5 (was 0.1): a fresh Jacobian is one dual
+    /// sweep, about 15 `f64` passes (22 `f64` right-hand sides per dual one), and a
+    /// Broyden step that halves the merit costs one pass; on the 443 FTDCR v4 val
+    /// rows 0.5 cut the dual RHS per row 420 -> 345 for 6039 -> 6257 `f64` ones (0.9:
+    /// 338 and 6296, about the same; always trying the chord at a row's start: 311
+    /// and 7286, worse). Session 20 measured the arc policy below on this coupling:
+    /// 2 190 / 105.4 -> 3 020 / 68.3 `f64` / dual RHS a row (worse).
+    pub(super) const CONDENSED: Self = Self {
+        skip_after_failure: true,
+        trials: 1,
+        contraction: 0.5,
+    };
+    /// The arc coupling: an explicit pass is cheap (120 RHS and the disks' rounds)
+    /// and a `Dual<15>` sweep is worth ~12 of them, so a chord step backtracks
+    /// before it gives way, and every row tries it first. On the 443 FTDCR v4 val
+    /// rows warm (`examples/tendon_profile`, `COUPLING=arc`), `f64` / dual RHS a row
+    /// and callgrind instructions: the condensed policy 950 / 97.2, 1.322e9; this
+    /// one 1 215 / 46.3, 1.141e9 (-14 %). Neighbours measured: 2 trials and 0.99,
+    /// 1 131 / 54.4, 1.144e9; 3 and 0.99, 1 233 / 47.7, 1.156e9; 4 and 0.99,
+    /// 1 347 / 47.4; 3 and 0.7, 1 244 / 47.9.
+    pub(super) const ARC: Self = Self {
+        skip_after_failure: false,
+        trials: 3,
+        contraction: 0.9,
+    };
+}
+
 /// The line search and the inner settle tolerance weigh a tendon mismatch `G` of
 /// this many metres like a unit of the scaled shooting residual `r` (at the default
 /// tolerances, 1e-10 and 1e-12 m, their ratio, so the default path is unchanged).
@@ -146,11 +195,15 @@ pub(super) struct JointBufs {
     sw_f: Vec<f64>,
     /// The Jacobian at the reference equilibrium (`reference` submodule).
     pub(super) rj: reference::RefJacobian,
+    /// This row started cold (from the reference equilibrium): its chord steps
+    /// follow [`ChordPolicy::CONDENSED`] whatever the coupling.
+    pub(super) cold: bool,
 }
 
 impl JointBufs {
     /// Drop the reused Jacobian (a cold start must not depend on earlier rows).
     pub(super) fn forget_jacobian(&mut self) {
+        self.cold = true;
         self.lu_valid = false;
         self.at_solution = false;
         self.first_chord_ok = true;
@@ -198,6 +251,7 @@ impl JointBufs {
             sw_dz: vec![0.0; n + p],
             sw_f: vec![0.0; n + p],
             rj: reference::RefJacobian::default(),
+            cold: true,
         }
     }
 }
@@ -296,13 +350,19 @@ impl TendonWorkspace {
             // a quasi-Newton step with the last Jacobian's inverse, Broyden-updated
             // since, when the active set is the same (a "chord" step below); a fresh
             // Jacobian when there is none or the chord step does not
-            // contract the merit by CHORD_CONTRACTION
+            // contract the merit enough (`ChordPolicy`)
             let mut chord = self.joint.lu_valid && self.joint.lu_taut == self.taut;
             // (a row started from an extrapolated point always tries the chord: on
             // the 443 FTDCR v4 val rows 2 026 -> 2 403 `f64` and 139.2 -> 117.6 dual
             // right-hand sides a row, 12.86 -> 12.76 M instructions; on 5 000 ticks
             // of the 1 kHz control loop dual 4.1 -> 0.5 a tick)
-            if it == 0 && chord && !self.joint.first_chord_ok && !self.joint.predicted {
+            let policy = ChordPolicy::of(self.ws.settings().cable_coupling, self.joint.cold);
+            if it == 0
+                && chord
+                && policy.skip_after_failure
+                && !self.joint.first_chord_ok
+                && !self.joint.predicted
+            {
                 self.joint.rows_fresh += 1;
                 chord = self.joint.rows_fresh % CHORD_PROBE == 0;
             }
@@ -353,7 +413,7 @@ impl TendonWorkspace {
                 // 0: the step's own active set, 1: trying the full step's, 2: tried
                 let mut switched = 0u8;
                 let mut alpha = 1.0;
-                for _ in 0..if fresh { 8 } else { 1 } {
+                for _ in 0..if fresh { 8 } else { policy.trials } {
                     for i in 0..n {
                         self.joint.x[i] = self.joint.xs[i] + alpha * self.joint.dz[i];
                     }
@@ -361,10 +421,10 @@ impl TendonWorkspace {
                         self.t[i] = (self.joint.ts[i] + alpha * self.joint.dz[n + i]).max(0.0);
                     }
                     if let Some(m) = self.joint_evaluate() {
-                        let enough = if fresh {
+                        let enough = if fresh || alpha < 1.0 {
                             (1.0 - 1e-4 * alpha) * l2_before
                         } else {
-                            CHORD_CONTRACTION * l2_before
+                            policy.contraction * l2_before
                         };
                         if self.joint.l2 < enough || m <= merit_tol {
                             accepted = Some(m);
