@@ -23,9 +23,13 @@
 //!   per recorded row (`tendon_readings_warm`), whose readings change ~600 times as
 //!   much from one solve to the next.
 //!
-//! * `tendon_readings_warm_arc`, `tendon_track_row_arc`: the warm and track rows
-//!   with `numerics.cable_coupling = "arc"` (the next holes predicted by an arc of
-//!   the gap, not solved for: `statics/pass/arc.rs`, `tests/arc_coupling.rs`).
+//! The scene's coupling is `numerics.cable_coupling = "arc"` since session 20 (the
+//! next holes predicted by an arc of the gap, not solved for: `statics/pass/arc.rs`,
+//! `tests/arc_coupling.rs`); before, it was the default `condensed`.
+//!
+//! * `tendon_readings_warm_condensed`, `tendon_track_row_condensed`: the warm and
+//!   track rows with `numerics.cable_coupling = "condensed"` (the next holes solved
+//!   for), to compare with the sessions before 20.
 //!
 //! Rows that do not converge during timing are counted on stderr. Log:
 //! `benches/README.md`.
@@ -137,19 +141,21 @@ fn benches(c: &mut Criterion) {
             failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
         })
     });
-    // the same warm rows and track rows with the arc coupling (`statics/pass/arc.rs`:
-    // next holes predicted, not solved; tips within 8 um mean of the condensed ones)
-    let mut arc_scene = scene.clone();
-    arc_scene.numerics.cable_coupling = cablesense::CableCoupling::Arc;
-    let mut ws = arc_scene.tendon_workspace().expect("tendon workspace");
-    g.bench_function("tendon_readings_warm_arc", |b| {
+    // the same warm rows and track rows with the condensed coupling (next holes
+    // solved for; the arc coupling's tips lie within 8 um mean of these)
+    let mut condensed_scene = scene.clone();
+    condensed_scene.numerics.cable_coupling = cablesense::CableCoupling::Condensed;
+    let mut ws = condensed_scene
+        .tendon_workspace()
+        .expect("tendon workspace");
+    g.bench_function("tendon_readings_warm_condensed", |b| {
         b.iter(|| {
             let r = ws.solve_readings(black_box(&rows[k % rows.len()].readings_m));
             failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
             k += 1;
         })
     });
-    g.bench_function("tendon_track_row_arc", |b| {
+    g.bench_function("tendon_track_row_condensed", |b| {
         b.iter(|| {
             failed += usize::from(!track_row(&mut ws, &rows[k % rows.len()]));
             k += 1;
