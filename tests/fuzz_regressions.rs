@@ -94,7 +94,7 @@ fn estimator_tick_inputs() {
 
 #[test]
 fn readings_stream_inputs() {
-    // every input on both robots (the fuzz target picks one per input:
+    // every input on all three robots (the fuzz target picks one per input:
     // `robot_for`, which the replays below therefore cover)
     replay(
         "readings_stream",
@@ -106,11 +106,16 @@ fn readings_stream_inputs() {
         |d| shared_readings::check_readings_on(shared_readings::Robot::Shipped, d),
         2,
     );
+    replay(
+        "readings_stream",
+        |d| shared_readings::check_readings_on(shared_readings::Robot::SmallArc, d),
+        2,
+    );
 }
 
 #[test]
 fn load_cells_stream_inputs() {
-    // every input on both robots (the fuzz target picks one per input:
+    // every input on all three robots (the fuzz target picks one per input:
     // `robot_for`, which the replays below therefore cover)
     replay(
         "load_cells_stream",
@@ -120,6 +125,11 @@ fn load_cells_stream_inputs() {
     replay(
         "load_cells_stream",
         |d| shared_load_cells::check_load_cells_on(shared_load_cells::Robot::Shipped, d),
+        2,
+    );
+    replay(
+        "load_cells_stream",
+        |d| shared_load_cells::check_load_cells_on(shared_load_cells::Robot::SmallArc, d),
         2,
     );
 }

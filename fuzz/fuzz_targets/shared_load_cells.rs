@@ -5,11 +5,11 @@
 //! displacement-driven tendons and an unknown tip load (force x, y and payload mass),
 //! every parsed row through the load estimator.
 //!
-//! Two robots with the same columns: the shipped load-cell demo
-//! (`data/load_cells/tdcr_load_cells.toml`) and a small copy of it (`shared_tdcr.rs`,
-//! [`Robot`], [`robot_for`]).
+//! Three robots with the same columns: the shipped load-cell demo
+//! (`data/load_cells/tdcr_load_cells.toml`) and a small copy of it with either cable
+//! coupling (`shared_tdcr.rs`, [`Robot`], [`robot_for`]).
 //!
-//! Budget of one input (both robots): at most [`MAX_ROWS`] rows ticked, forward
+//! Budget of one input (every robot): at most [`MAX_ROWS`] rows ticked, forward
 //! solves capped at `shared_tdcr::MAX_ITERATIONS` Newton iterations and
 //! `shared_tdcr::MAX_CONTINUATION_STEPS` continuation steps (`shared.rs` caps the `scene_*`
 //! targets' solves at 6 and 4), at most [`MAX_ESTIMATE_ITERATIONS`] estimator
@@ -62,9 +62,11 @@ pub fn scene(robot: Robot) -> Scene {
 /// The robot's scene (capped) and its freshly built estimator (built once per process).
 fn template(robot: Robot) -> &'static (Scene, TendonLoadEstimator) {
     static SMALL: OnceLock<(Scene, TendonLoadEstimator)> = OnceLock::new();
+    static SMALL_ARC: OnceLock<(Scene, TendonLoadEstimator)> = OnceLock::new();
     static SHIPPED: OnceLock<(Scene, TendonLoadEstimator)> = OnceLock::new();
     let cell = match robot {
         Robot::Small => &SMALL,
+        Robot::SmallArc => &SMALL_ARC,
         Robot::Shipped => &SHIPPED,
     };
     cell.get_or_init(|| {

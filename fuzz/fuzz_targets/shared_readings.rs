@@ -2,11 +2,12 @@
 //! arbitrary bytes as a readings file of a two-segment TDCR with six
 //! displacement-driven tendons, every parsed row solved warm-started.
 //!
-//! Two robots with the columns of the shipped scene
-//! (`data/scenes/tdcr_two_segment.toml`), so every input means the same rows on both:
-//! the scene itself and a small copy of it (`shared_tdcr.rs`, [`Robot`], [`robot_for`]).
+//! Three robots with the columns of the shipped scene
+//! (`data/scenes/tdcr_two_segment.toml`), so every input means the same rows on each:
+//! the scene itself and a small copy of it with either cable coupling (`shared_tdcr.rs`,
+//! [`Robot`], [`robot_for`]).
 //!
-//! Budget of one input (both robots): at most [`MAX_ROWS`] solved rows, forward
+//! Budget of one input (every robot): at most [`MAX_ROWS`] solved rows, forward
 //! solves capped at `shared_tdcr::MAX_ITERATIONS` Newton iterations and
 //! `shared_tdcr::MAX_CONTINUATION_STEPS` continuation steps (`shared.rs` caps the `scene_*`
 //! targets' solves at 6 and 4), and the tendon iteration's budget of
@@ -42,9 +43,11 @@ pub const MAX_ROWS: usize = 4;
 /// per process).
 fn template(robot: Robot) -> &'static (Scene, TendonWorkspace) {
     static SMALL: OnceLock<(Scene, TendonWorkspace)> = OnceLock::new();
+    static SMALL_ARC: OnceLock<(Scene, TendonWorkspace)> = OnceLock::new();
     static SHIPPED: OnceLock<(Scene, TendonWorkspace)> = OnceLock::new();
     let cell = match robot {
         Robot::Small => &SMALL,
+        Robot::SmallArc => &SMALL_ARC,
         Robot::Shipped => &SHIPPED,
     };
     cell.get_or_init(|| {

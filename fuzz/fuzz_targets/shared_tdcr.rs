@@ -5,14 +5,17 @@
 //! Each target runs a shipped scene and a small copy of it (five disks per segment
 //! instead of ten, RK4 with 10 steps per section instead of 20) whose forward solves
 //! are cheaper (converged rows on replay: 0.9 ms per forward solve against 2.6 ms on
-//! the shipped scene). The fuzz target runs the small robot on most inputs and the
+//! the shipped scene), the small copy both with the scene's cable coupling and with
+//! the arc coupling (`numerics.cable_coupling = "arc"`, the FTDCR v4 scenes' since
+//! session 20, whose warm rows follow their own chord policy). The fuzz target runs
+//! a small robot on most inputs (either coupling, by the input's length) and the
 //! shipped one on about one in 32 ([`robot_for`]); `tests/fuzz_regressions.rs` replays
-//! every committed input on both.
+//! every committed input on all three.
 
 #![allow(dead_code)]
 
 use cablesense::tendons::TendonSettings;
-use cablesense::{Integrator, Scene};
+use cablesense::{CableCoupling, Integrator, Scene};
 
 /// Newton iterations of one forward (shooting) solve. A row whose solve stalls ran
 /// 44-97 forward solves of 20-60 ms each on the shipped scene at its own limits (50
@@ -50,16 +53,21 @@ const SMALL_RK4_STEPS: usize = 10;
 pub enum Robot {
     /// Five disks per segment, RK4 with 10 steps per section.
     Small,
+    /// [`Robot::Small`] with the arc coupling.
+    SmallArc,
     /// The target's shipped scene (ten disks per segment, RK4 with 20 steps).
     Shipped,
 }
 
 /// The robot the fuzz target uses for `data`: the shipped scene when the input's
-/// length is 31 modulo 32 (about one input in 32), else the small one. The choice
-/// consumes no byte, so an input's rows are the same on both robots.
+/// length is 31 modulo 32 (about one input in 32), else the small one, with the arc
+/// coupling when the length is even. The choice consumes no byte, so an input's rows
+/// are the same on every robot.
 pub fn robot_for(data: &[u8]) -> Robot {
     if data.len() % 32 == 31 {
         Robot::Shipped
+    } else if data.len() % 2 == 0 {
+        Robot::SmallArc
     } else {
         Robot::Small
     }
@@ -69,7 +77,7 @@ pub fn robot_for(data: &[u8]) -> Robot {
 /// is [`Robot::Small`], and the forward solve's numerics capped.
 pub fn scene(text: &str, robot: Robot) -> Scene {
     let mut scene = Scene::from_toml_str(text).expect("shipped scene parses");
-    if robot == Robot::Small {
+    if robot != Robot::Shipped {
         for s in &mut scene.robot.sections {
             let g = s.guides.as_mut().expect("shipped sections have disks");
             g.count = SMALL_DISKS;
@@ -79,6 +87,9 @@ pub fn scene(text: &str, robot: Robot) -> Scene {
         scene.numerics.integrator = Integrator::Rk4 {
             steps_per_section: SMALL_RK4_STEPS,
         };
+    }
+    if robot == Robot::SmallArc {
+        scene.numerics.cable_coupling = CableCoupling::Arc;
     }
     let n = &mut scene.numerics;
     n.max_iterations = n.max_iterations.min(MAX_ITERATIONS);
