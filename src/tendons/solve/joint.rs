@@ -98,9 +98,10 @@ impl ChordPolicy {
     /// before it gives way, and every row tries it first. On the 443 FTDCR v4 val
     /// rows warm (`examples/tendon_profile`, `COUPLING=arc`), `f64` / dual RHS a row
     /// and callgrind instructions: the condensed policy 950 / 97.2, 1.322e9; this
-    /// one 1 215 / 46.3, 1.141e9 (-14 %). Neighbours measured: 2 trials and 0.99,
-    /// 1 131 / 54.4, 1.144e9; 3 and 0.99, 1 233 / 47.7, 1.156e9; 4 and 0.99,
-    /// 1 347 / 47.4; 3 and 0.7, 1 244 / 47.9.
+    /// one 1 215 / 46.3, 1.132e9 (-14 %). Neighbours, measured with a scratch build
+    /// that read the rules from the environment (this one there: 1.141e9): 2 trials
+    /// and 0.99, 1 131 / 54.4, 1.144e9; 3 and 0.99, 1 233 / 47.7, 1.156e9; 4 and
+    /// 0.99, 1 347 / 47.4; 3 and 0.7, 1 244 / 47.9.
     pub(super) const ARC: Self = Self {
         skip_after_failure: false,
         trials: 3,
@@ -195,15 +196,15 @@ pub(super) struct JointBufs {
     sw_f: Vec<f64>,
     /// The Jacobian at the reference equilibrium (`reference` submodule).
     pub(super) rj: reference::RefJacobian,
-    /// This row started cold (from the reference equilibrium): its chord steps
-    /// follow [`ChordPolicy::CONDENSED`] whatever the coupling.
+    /// This row started cold (from the reference equilibrium; set by
+    /// `solve_readings_from`): its chord steps follow [`ChordPolicy::CONDENSED`]
+    /// whatever the coupling.
     pub(super) cold: bool,
 }
 
 impl JointBufs {
     /// Drop the reused Jacobian (a cold start must not depend on earlier rows).
     pub(super) fn forget_jacobian(&mut self) {
-        self.cold = true;
         self.lu_valid = false;
         self.at_solution = false;
         self.first_chord_ok = true;
@@ -322,6 +323,7 @@ impl TendonWorkspace {
             return Err(first_step);
         };
         self.ref_check();
+        let policy = ChordPolicy::of(self.ws.settings().cable_coupling, self.joint.cold);
         for it in 0..JOINT_MAX_ITERATIONS {
             self.report.iterations = it;
             if merit <= merit_tol {
@@ -356,7 +358,6 @@ impl TendonWorkspace {
             // the 443 FTDCR v4 val rows 2 026 -> 2 403 `f64` and 139.2 -> 117.6 dual
             // right-hand sides a row, 12.86 -> 12.76 M instructions; on 5 000 ticks
             // of the 1 kHz control loop dual 4.1 -> 0.5 a tick)
-            let policy = ChordPolicy::of(self.ws.settings().cable_coupling, self.joint.cold);
             if it == 0
                 && chord
                 && policy.skip_after_failure
