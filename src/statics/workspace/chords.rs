@@ -52,12 +52,23 @@ impl Workspace {
     /// solution (inexact Newton: an inner error far below the outer residual does not
     /// change the step); the caller restores `LOCAL_TOL` before it reports a point.
     pub(crate) fn set_local_tolerance(&mut self, frac: f64) -> f64 {
-        let t = if frac.is_nan() {
+        let t = self.settle_tolerance(frac);
+        self.b64.local_tol = t;
+        t
+    }
+
+    /// The settle tolerance a pass may use for `frac`: `frac` clamped to
+    /// `[LOCAL_TOL, 1e-9]` when the plan settles next holes (the condensed coupling),
+    /// else `LOCAL_TOL` (NaN too). Why: only the condensed coupling's passes read it
+    /// (`statics/pass/condensed.rs`); under the arc and exact couplings, and on a rod
+    /// without tensioned cables through disks, a loose value changed nothing but made
+    /// every solve that converged from it re-evaluate its point "with settled holes":
+    /// one `f64` pass spent on the same arithmetic.
+    pub(super) fn settle_tolerance(&self, frac: f64) -> f64 {
+        if !self.plan.condensed || frac.is_nan() {
             LOCAL_TOL
         } else {
             frac.clamp(LOCAL_TOL, 1e-9)
-        };
-        self.b64.local_tol = t;
-        t
+        }
     }
 }

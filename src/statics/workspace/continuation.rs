@@ -35,7 +35,7 @@ impl Workspace {
     pub(super) fn solve_cold(&mut self) -> (SolveStatus, usize, usize) {
         self.cold_guess(1.0);
         self.lu_valid = false;
-        self.b64.local_tol = 1e-9;
+        self.b64.local_tol = self.settle_tolerance(1e-9);
         if self.settings.branch_guard
             && !self.guarded()
             && self.load_intensity() > CERTIFY_INTENSITY

@@ -170,7 +170,7 @@ impl Workspace {
             }
             // inexact inner solves while far away: 1e-10 of the outer residual,
             // between LOCAL_TOL and 1e-9 (full accuracy once res < 1e-3)
-            self.b64.local_tol = (1e-10 * max_abs(&self.res)).clamp(LOCAL_TOL, 1e-9);
+            self.b64.local_tol = self.settle_tolerance(1e-10 * max_abs(&self.res));
             let fresh = !self.lu_valid;
             if fresh && jacobians >= max_iterations {
                 return (self.status_here(SolveStatus::MaxIterations), it);
