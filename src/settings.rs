@@ -90,6 +90,87 @@ impl Default for Integrator {
     }
 }
 
+/// Settings of the tendon iteration of a solve from readings
+/// (`crate::tendons::TendonWorkspace`; the shooting solve inside has the rest of
+/// [`SolverSettings`]). Scene form: `[numerics.tendons]`, each key optional.
+///
+/// The two tolerances (this `tolerance_m` and [`SolverSettings::tolerance`]) are the
+/// user's accuracy choice. The defaults solve to round-off; a control loop can loosen
+/// both. Measured on the 443 FTDCR v4 val rows solved warm in sequence
+/// (`examples/tendon_profile`, `TOL`, `TOL_M`, session 21), `f64` / dual right-hand
+/// sides a row and the largest tip change from the defaults:
+///
+/// | `numerics.tolerance` | `tolerance_m` | RHS a row | tip change |
+/// |---|---|---|---|
+/// | 1e-10 | 1e-12 (defaults) | 1 209 / 46.3 | - |
+/// | 1e-6 | 1e-9 | 878 / 50.7 | 0.03 um |
+/// | 1e-4 | 1e-7 | 681 / 52.6 | 2.5 um |
+///
+/// (a dual right-hand side costs about 10 `f64` ones).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TendonSettings {
+    /// Newton iterations on the tensions (default 30).
+    pub max_iterations: usize,
+    /// Tolerance on `max_i |G_i|` (m), the mismatch between each taut tendon's path
+    /// and the length it covers at its tension (default 1e-12 m).
+    pub tolerance_m: f64,
+    /// Warm solves first try Newton on the shooting unknowns and the tensions
+    /// together (`tendons::solve::joint`), handing back to the nested method when it does
+    /// not converge (default true; false runs the nested method only).
+    pub joint_newton: bool,
+    /// Nested shooting solves one row may run
+    /// ([`crate::tendons::TendonReport::shooting_solves`]:
+    /// each a full Newton solve of the rod at fixed tensions, with continuation and
+    /// branch checks when it needs them; line-search trials included; default 200).
+    /// A row that reaches it ends with `max_iterations`, so a row the solver cannot
+    /// reach costs a bounded amount of work (a control loop's worst tick; the fuzz
+    /// targets set 12). The joint path's single passes are bounded by its own
+    /// iteration and substep limits and not counted. Measured: an unreachable 82 mm
+    /// pull on the two-segment TDCR's 0.1 m segments ran 108 shooting solves in 2.5 s
+    /// before stalling.
+    pub max_shooting_solves: usize,
+}
+
+impl Default for TendonSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 30,
+            tolerance_m: 1e-12,
+            joint_newton: true,
+            max_shooting_solves: 200,
+        }
+    }
+}
+
+impl TendonSettings {
+    /// Every field at its default (a scene then leaves `[numerics.tendons]` out).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Check every field (names them as `numerics.tendons.*`).
+    pub fn validate(&self) -> Result<(), ModelError> {
+        ModelError::positive("numerics.tendons.tolerance_m", self.tolerance_m)?;
+        for (field, v) in [
+            ("numerics.tendons.max_iterations", self.max_iterations),
+            (
+                "numerics.tendons.max_shooting_solves",
+                self.max_shooting_solves,
+            ),
+        ] {
+            if v == 0 || v > 100_000 {
+                return Err(ModelError::OutOfRange {
+                    field: field.into(),
+                    value: v as f64,
+                    why: "between 1 and 100000".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Everything that controls a forward solve.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -126,6 +207,10 @@ pub struct SolverSettings {
     ///   solved cold.
     ///   Small control-loop steps pay nothing extra.
     pub branch_guard: bool,
+    /// The tendon iteration of a solve from readings (`[numerics.tendons]`; defaults
+    /// on [`TendonSettings`]). Read by `crate::tendons::TendonWorkspace` only.
+    #[serde(skip_serializing_if = "TendonSettings::is_default")]
+    pub tendons: TendonSettings,
 }
 
 impl Default for SolverSettings {
@@ -140,6 +225,7 @@ impl Default for SolverSettings {
             max_continuation_steps: 32,
             cable_coupling: CableCoupling::default(),
             branch_guard: true,
+            tendons: TendonSettings::default(),
         }
     }
 }
@@ -183,6 +269,6 @@ impl SolverSettings {
                 why: "at most 10000".into(),
             });
         }
-        Ok(())
+        self.tendons.validate()
     }
 }

@@ -287,6 +287,31 @@ fn scene_zero_rk4_steps_names_field_and_value() {
     assert_error(&r, &["numerics.integrator.rk4.steps_per_section", "0"]);
 }
 
+/// `[numerics.tendons]`: a non-positive tendon tolerance, a zero iteration limit and
+/// a misspelt key, each named.
+#[test]
+fn scene_bad_tendon_solver_settings_name_the_field() {
+    let text = shipped(TDCR);
+    let r = solve_scene(
+        "tendtol",
+        "s.toml",
+        &format!("{text}\n[numerics.tendons]\ntolerance_m = -1e-9\n"),
+    );
+    assert_error(&r, &["numerics.tendons.tolerance_m", "-0.000000001"]);
+    let r = solve_scene(
+        "tenditer",
+        "s.toml",
+        &format!("{text}\n[numerics.tendons]\nmax_iterations = 0\n"),
+    );
+    assert_error(&r, &["numerics.tendons.max_iterations", "0"]);
+    let r = solve_scene(
+        "tendkey",
+        "s.toml",
+        &format!("{text}\n[numerics.tendons]\ntolerance = 1e-9\n"),
+    );
+    assert_error(&r, &["tolerance", "tolerance_m"]);
+}
+
 #[test]
 fn scene_misspelt_key_names_key_line_and_column() {
     let r = solve_scene(

@@ -24,7 +24,7 @@ use cablesense::Scene;
 const TIP_PER_TENDON: f64 = 100.0;
 
 /// Tips (m) and the total of forward passes of the first `rows` val rows, solved
-/// warm in sequence at the tendon tolerance `tol_m`.
+/// warm in sequence at the tendon tolerance `tol_m` (set through the API).
 fn chain(tol_m: f64, rows: usize) -> (Vec<nalgebra::Vector3<f64>>, usize) {
     let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
     let mut ws = scene.tendon_workspace().expect("workspace");
@@ -32,6 +32,29 @@ fn chain(tol_m: f64, rows: usize) -> (Vec<nalgebra::Vector3<f64>>, usize) {
         tolerance_m: tol_m,
         ..Default::default()
     });
+    chain_ws(&scene, ws, rows)
+}
+
+/// The same on the shipped scene with `table` appended to its text (the scene's own
+/// settings, no API call).
+fn chain_scene(table: &str, rows: usize) -> (Vec<nalgebra::Vector3<f64>>, usize) {
+    let text = std::fs::read_to_string("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let scene = Scene::parse_validated(
+        &format!("{text}\n{table}\n"),
+        std::path::Path::new("ftdcr_v4_tol.toml"),
+        false,
+    )
+    .expect("valid scene");
+    let ws = scene.tendon_workspace().expect("workspace");
+    chain_ws(&scene, ws, rows)
+}
+
+fn chain_ws(
+    scene: &Scene,
+    mut ws: cablesense::tendons::TendonWorkspace,
+    rows: usize,
+) -> (Vec<nalgebra::Vector3<f64>>, usize) {
+    let tol_m = ws.tendon_settings().tolerance_m;
     let mut parser = scene.readings_parser(&ws);
     let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").expect("shipped data");
     let mut tips = Vec::new();
@@ -83,4 +106,44 @@ fn a_looser_tendon_tolerance_keeps_warm_rows_on_the_joint_path() {
             );
         }
     }
+}
+
+/// `[numerics.tendons]` in a scene sets what `set_tendon_settings` sets: the same
+/// rows, bit for bit.
+#[test]
+fn the_scene_table_sets_the_tendon_tolerance() {
+    let (api, passes_api) = chain(1e-9, 20);
+    let (file, passes_file) = chain_scene("[numerics.tendons]\ntolerance_m = 1e-9", 20);
+    assert_eq!(passes_api, passes_file);
+    assert_eq!(api, file);
+}
+
+/// The looser pair of the settings' table (`numerics.tolerance = 1e-6`,
+/// `tolerance_m = 1e-9`, documented on `TendonSettings`): fewer forward passes than
+/// the defaults on the first 40 val rows, tips within 1 um of theirs (measured on
+/// all 443 rows: 0.03 um at most; the scaled shooting tolerance alone allows about
+/// `1e-6 L` ~ 0.19 um of tip).
+#[test]
+fn a_control_loop_tolerance_pair_costs_fewer_passes() {
+    let (tips0, passes0) = chain(1e-12, 40);
+    let text = std::fs::read_to_string("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let loose = text.replace("[numerics]\n", "[numerics]\ntolerance = 1e-6\n");
+    assert_ne!(loose, text, "the scene has a [numerics] table");
+    let scene = Scene::parse_validated(
+        &format!("{loose}\n[numerics.tendons]\ntolerance_m = 1e-9\n"),
+        std::path::Path::new("ftdcr_v4_loose.toml"),
+        false,
+    )
+    .expect("valid scene");
+    let ws = scene.tendon_workspace().expect("workspace");
+    let (tips_l, passes_l) = chain_ws(&scene, ws, 40);
+    assert!(
+        passes_l < passes0,
+        "{passes_l} forward passes, default {passes0}"
+    );
+    for (k, (a, b)) in tips_l.iter().zip(&tips0).enumerate() {
+        let d = (a - b).norm();
+        assert!(d <= 1e-6, "row {k}: tip {d:e} m from the default's");
+    }
+    assert_eq!(tips_l.len(), tips0.len());
 }

@@ -36,6 +36,7 @@ use crate::loads::Loads;
 use crate::math::DenseLu;
 use crate::robot::Robot;
 use crate::settings::SolverSettings;
+pub use crate::settings::TendonSettings;
 use crate::statics::{ParamSite, SolveStatus, Start, Workspace};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -46,42 +47,6 @@ mod joint;
 mod nested;
 // Sensitivities with respect to extra load parameters (load estimation).
 mod loads;
-
-/// Settings of the tendon iteration (the shooting solve inside has its own).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct TendonSettings {
-    /// Newton iterations on the tensions (default 30).
-    pub max_iterations: usize,
-    /// Tolerance on `max_i |G_i|` (m), the mismatch between each taut tendon's path
-    /// and the length it covers at its tension (default 1e-12 m).
-    pub tolerance_m: f64,
-    /// Warm solves first try Newton on the shooting unknowns and the tensions
-    /// together (`joint` submodule), handing back to the nested method when it does
-    /// not converge (default true; false runs the nested method only).
-    pub joint_newton: bool,
-    /// Nested shooting solves one row may run ([`TendonReport::shooting_solves`]:
-    /// each a full Newton solve of the rod at fixed tensions, with continuation and
-    /// branch checks when it needs them; line-search trials included; default 200).
-    /// A row that reaches it ends with `max_iterations`, so a row the solver cannot
-    /// reach costs a bounded amount of work (a control loop's worst tick; the fuzz
-    /// targets set 12). The joint path's single passes are bounded by its own
-    /// iteration and substep limits and not counted. Measured: an unreachable 82 mm
-    /// pull on the two-segment TDCR's 0.1 m segments ran 108 shooting solves in 2.5 s
-    /// before stalling.
-    pub max_shooting_solves: usize,
-}
-
-impl Default for TendonSettings {
-    fn default() -> Self {
-        Self {
-            max_iterations: 30,
-            tolerance_m: 1e-12,
-            joint_newton: true,
-            max_shooting_solves: 200,
-        }
-    }
-}
 
 /// Outcome of one solve from readings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -232,6 +197,7 @@ impl TendonWorkspace {
         let routes: Vec<usize> = robot.cables().iter().map(|c| c.route.len()).collect();
         let mu = robot.friction_mu();
         let deadband = robot.spec().friction.as_ref().map_or(0.0, |f| f.deadband_m);
+        let tendon_settings = settings.tendons;
         let ws = Workspace::with_params(robot, loads, settings, &params)?;
         let p = driven.len();
         let np = params.len();
@@ -263,7 +229,7 @@ impl TendonWorkspace {
             mean_factor: vec![1.0; p],
             has_solution: false,
             x_ref: Vec::new(),
-            settings: TendonSettings::default(),
+            settings: tendon_settings,
             report: TendonReport {
                 status: SolveStatus::NonFinite,
                 iterations: 0,
@@ -317,9 +283,13 @@ impl TendonWorkspace {
         Ok(())
     }
 
-    /// Replace the tendon settings.
+    /// Replace the tendon settings (they start as the scene's `numerics.tendons`).
     pub fn set_tendon_settings(&mut self, settings: TendonSettings) {
         self.settings = settings;
+    }
+    /// The tendon settings in effect.
+    pub fn tendon_settings(&self) -> &TendonSettings {
+        &self.settings
     }
     /// Cable indices of the displacement-driven tendons, in reading order.
     pub fn driven(&self) -> &[usize] {
