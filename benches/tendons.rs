@@ -27,6 +27,10 @@
 //! next holes predicted by an arc of the gap, not solved for: `statics/pass/arc.rs`,
 //! `tests/arc_coupling.rs`); before, it was the default `condensed`.
 //!
+//! * `tendon_readings_warm_loose`: the warm rows at a control loop's tolerances
+//!   (`numerics.tolerance = 1e-6`, `[numerics.tendons] tolerance_m = 1e-9`; tips
+//!   within 0.03 um of the defaults' on the 443 val rows). Not the case (that
+//!   is the defaults, above): what a user who sets them gets.
 //! * `tendon_readings_warm_condensed`, `tendon_track_row_condensed`: the warm and
 //!   track rows with `numerics.cable_coupling = "condensed"` (the next holes solved
 //!   for), to compare with the sessions before 20.
@@ -139,6 +143,20 @@ fn benches(c: &mut Criterion) {
             tick.next(&rows, &times);
             let r = ws.solve_readings(black_box(&tick.q));
             failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+        })
+    });
+    // the same warm rows at a control loop's tolerances (`numerics.tolerance` 1e-6,
+    // `numerics.tendons.tolerance_m` 1e-9 m: tips within 0.03 um of the defaults' on
+    // the 443 val rows; `TendonSettings`, `tests/tendon_tolerance.rs`)
+    let mut loose_scene = scene.clone();
+    loose_scene.numerics.tolerance = 1e-6;
+    loose_scene.numerics.tendons.tolerance_m = 1e-9;
+    let mut ws_loose = loose_scene.tendon_workspace().expect("tendon workspace");
+    g.bench_function("tendon_readings_warm_loose", |b| {
+        b.iter(|| {
+            let r = ws_loose.solve_readings(black_box(&rows[k % rows.len()].readings_m));
+            failed += usize::from(!r.is_ok_and(|r| r.status.is_converged()));
+            k += 1;
         })
     });
     // the same warm rows and track rows with the condensed coupling (next holes

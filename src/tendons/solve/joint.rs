@@ -535,3 +535,26 @@ impl TendonWorkspace {
         false
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The backtracking chord rules are for warm rows under the arc coupling only:
+    /// cold rows and the couplings whose passes settle the next holes keep the
+    /// condensed rules (measured worse with the arc ones: see [`ChordPolicy`]).
+    #[test]
+    fn the_arc_chord_policy_is_for_warm_arc_rows_only() {
+        assert_eq!(ChordPolicy::of(CableCoupling::Arc, false), ChordPolicy::ARC);
+        assert_eq!(
+            ChordPolicy::of(CableCoupling::Arc, true),
+            ChordPolicy::CONDENSED
+        );
+        for coupling in [CableCoupling::Condensed, CableCoupling::Exact] {
+            for cold in [false, true] {
+                assert_eq!(ChordPolicy::of(coupling, cold), ChordPolicy::CONDENSED);
+            }
+        }
+        assert_ne!(ChordPolicy::ARC, ChordPolicy::CONDENSED);
+    }
+}
