@@ -152,6 +152,21 @@ def test_readings_round_trip():
     assert np.allclose(cold["tip"], row["tip"], atol=1e-8)
 
 
+def test_scene_tendon_settings():
+    # [numerics.tendons] sets the tendon iteration of every solver built from the
+    # scene; a looser tolerance moves the tip by far less than a micrometre here
+    text = TDCR.read_text()
+    loose = cablesense.Scene.from_toml(text + "\n[numerics.tendons]\ntolerance_m = 1e-9\n")
+    q = np.array([1.0e-3, 0.0, 0.0, 0.0, 0.5e-3, 0.0])
+    a = cablesense.TendonSolver(cablesense.Scene.from_file(TDCR)).solve(q)
+    b = cablesense.TendonSolver(loose).solve(q)
+    assert a["report"]["converged"] and b["report"]["converged"]
+    assert np.linalg.norm(a["tip"] - b["tip"]) < 1e-6
+    with pytest.raises(cablesense.SceneError) as e:
+        cablesense.Scene.from_toml(text + "\n[numerics.tendons]\ntolerance_m = 0.0\n")
+    assert e.value.field == "numerics.tendons.tolerance_m"
+
+
 def test_readings_errors_name_the_reading():
     ts = cablesense.TendonSolver(cablesense.Scene.from_file(TDCR))
     with pytest.raises(cablesense.ReadingsError) as e:
