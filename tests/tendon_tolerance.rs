@@ -35,16 +35,15 @@ fn chain(tol_m: f64, rows: usize) -> (Vec<nalgebra::Vector3<f64>>, usize) {
     chain_ws(&scene, ws, rows)
 }
 
-/// The same on the shipped scene with `table` appended to its text (the scene's own
-/// settings, no API call).
-fn chain_scene(table: &str, rows: usize) -> (Vec<nalgebra::Vector3<f64>>, usize) {
-    let text = std::fs::read_to_string("data/scenes/ftdcr_v4.toml").expect("shipped scene");
-    let scene = Scene::parse_validated(
-        &format!("{text}\n{table}\n"),
-        std::path::Path::new("ftdcr_v4_tol.toml"),
-        false,
-    )
-    .expect("valid scene");
+/// The shipped scene's text (to edit).
+fn shipped_scene() -> String {
+    std::fs::read_to_string("data/scenes/ftdcr_v4.toml").expect("shipped scene")
+}
+
+/// The same on a scene from `text` (its own settings, no API call).
+fn chain_scene(text: &str, rows: usize) -> (Vec<nalgebra::Vector3<f64>>, usize) {
+    let path = std::path::Path::new("ftdcr_v4_edited.toml");
+    let scene = Scene::parse_validated(text, path, false).expect("valid scene");
     let ws = scene.tendon_workspace().expect("workspace");
     chain_ws(&scene, ws, rows)
 }
@@ -113,7 +112,8 @@ fn a_looser_tendon_tolerance_keeps_warm_rows_on_the_joint_path() {
 #[test]
 fn the_scene_table_sets_the_tendon_tolerance() {
     let (api, passes_api) = chain(1e-9, 20);
-    let (file, passes_file) = chain_scene("[numerics.tendons]\ntolerance_m = 1e-9", 20);
+    let table = "\n[numerics.tendons]\ntolerance_m = 1e-9\n";
+    let (file, passes_file) = chain_scene(&(shipped_scene() + table), 20);
     assert_eq!(passes_api, passes_file);
     assert_eq!(api, file);
 }
@@ -126,17 +126,11 @@ fn the_scene_table_sets_the_tendon_tolerance() {
 #[test]
 fn a_control_loop_tolerance_pair_costs_fewer_passes() {
     let (tips0, passes0) = chain(1e-12, 40);
-    let text = std::fs::read_to_string("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let text = shipped_scene();
     let loose = text.replace("[numerics]\n", "[numerics]\ntolerance = 1e-6\n");
     assert_ne!(loose, text, "the scene has a [numerics] table");
-    let scene = Scene::parse_validated(
-        &format!("{loose}\n[numerics.tendons]\ntolerance_m = 1e-9\n"),
-        std::path::Path::new("ftdcr_v4_loose.toml"),
-        false,
-    )
-    .expect("valid scene");
-    let ws = scene.tendon_workspace().expect("workspace");
-    let (tips_l, passes_l) = chain_ws(&scene, ws, 40);
+    let table = "\n[numerics.tendons]\ntolerance_m = 1e-9\n";
+    let (tips_l, passes_l) = chain_scene(&(loose + table), 40);
     assert!(
         passes_l < passes0,
         "{passes_l} forward passes, default {passes0}"
