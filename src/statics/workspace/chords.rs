@@ -46,9 +46,9 @@ impl Workspace {
 
 impl Workspace {
     /// Condensed coupling: tolerance of the next-hole settle of the following `f64`
-    /// passes, as a fraction of the rod length, clamped to `[LOCAL_TOL, 1e-9]`
-    /// (`LOCAL_TOL` = 1e-15 is the default and what every solve ends with); returns
-    /// the value set. For an outer iteration that evaluates points far from its
+    /// passes, as a fraction of the rod length ([`Self::settle_tolerance`]: clamped to
+    /// `[LOCAL_TOL, 1e-9]`, or `LOCAL_TOL` on a plan without a settle; `LOCAL_TOL` =
+    /// 1e-15 is the default and what every solve ends with); returns the value set. For an outer iteration that evaluates points far from its
     /// solution (inexact Newton: an inner error far below the outer residual does not
     /// change the step); the caller restores `LOCAL_TOL` before it reports a point.
     pub(crate) fn set_local_tolerance(&mut self, frac: f64) -> f64 {
@@ -69,6 +69,37 @@ impl Workspace {
             LOCAL_TOL
         } else {
             frac.clamp(LOCAL_TOL, 1e-9)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LOCAL_TOL;
+    use crate::{CableCoupling, Scene};
+
+    /// The settle tolerance is loose only where a pass settles next holes: the FTDCR
+    /// v4 scene on the condensed coupling clamps it to `[LOCAL_TOL, 1e-9]`; the same
+    /// scene on the arc or exact coupling, whose passes never read it, always gets
+    /// `LOCAL_TOL` (a loose value there only cost a confirming pass).
+    #[test]
+    fn only_a_settling_plan_gets_a_loose_settle_tolerance() {
+        let mut scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+        for coupling in [
+            CableCoupling::Condensed,
+            CableCoupling::Arc,
+            CableCoupling::Exact,
+        ] {
+            scene.numerics.cable_coupling = coupling;
+            let ws = scene.tendon_workspace().expect("workspace");
+            let ws = ws.workspace();
+            let settles = coupling == CableCoupling::Condensed;
+            assert_eq!(ws.plan.condensed, settles, "{coupling:?}");
+            for (frac, want) in [(1e-12, 1e-12), (1.0, 1e-9), (0.0, LOCAL_TOL)] {
+                let want = if settles { want } else { LOCAL_TOL };
+                assert_eq!(ws.settle_tolerance(frac), want, "{coupling:?} {frac}");
+            }
+            assert_eq!(ws.settle_tolerance(f64::NAN), LOCAL_TOL, "{coupling:?}");
         }
     }
 }
