@@ -96,6 +96,23 @@ pub(crate) struct PlanCable {
     pub gap: Vec<(f64, usize)>,
 }
 
+/// A chord of the arc coupling from a disk on to the next disk of its cable's route
+/// (`statics::pass::arc`): what the disk's rounds read, gathered once so that a
+/// round touches no [`PlanCable`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ArcChord {
+    /// Cable index.
+    pub cable: usize,
+    /// Hole vector on this disk and on the next one, each in its own disk's frame (m).
+    pub rho: Vector3<f64>,
+    pub rho_next: Vector3<f64>,
+    /// The gap to the next disk: arc length (m) and section ([`PlanCable::gap`]).
+    pub gap: (f64, usize),
+    /// The gap differs from the previous chord's in the guide's list (always for the
+    /// first): the rounds predict it anew.
+    pub new_gap: bool,
+}
+
 /// Everything a pass needs.
 #[derive(Clone, Debug)]
 pub(crate) struct Plan {
@@ -141,6 +158,9 @@ pub(crate) struct Plan {
     /// Arc coupling ([`crate::settings::CableCoupling::Arc`]): the chord towards the
     /// next hole points at a predicted hole (`statics::pass::arc`); no hole unknowns.
     pub arc: bool,
+    /// Arc coupling, per guide: the chords on to a predicted next hole, in the order
+    /// of `guide_cables` (the tensioned cables that go on). Empty otherwise.
+    pub arc_chords: Vec<Vec<ArcChord>>,
     /// Local dual directions a sweep carries: [`JUMP_DIRS`] when `condensed`, else 0.
     pub max_local: usize,
     /// Largest `3 * pending[g].len()`: the size of a segment's local iteration.
@@ -361,6 +381,26 @@ impl Plan {
                 },
             });
         }
+        let arc_chords: Vec<Vec<ArcChord>> = guide_cables
+            .iter()
+            .map(|list| {
+                let mut out: Vec<ArcChord> = Vec::new();
+                for &(j, k) in list {
+                    if !(arc && cables[j].tensioned && k + 1 < cables[j].len) {
+                        continue;
+                    }
+                    let gap = cables[j].gap[k];
+                    out.push(ArcChord {
+                        cable: j,
+                        rho: cables[j].hole_local[k],
+                        rho_next: cables[j].hole_local[k + 1],
+                        gap,
+                        new_gap: out.last().is_none_or(|a| a.gap != gap),
+                    });
+                }
+                out
+            })
+            .collect();
         let ei = robot.sections()[0].stiffness.bend_twist.x;
         let mut plan = Self {
             intervals,
@@ -401,6 +441,7 @@ impl Plan {
             tension_param,
             condensed,
             arc,
+            arc_chords,
             pending,
             max_local,
             max_pending_dirs,

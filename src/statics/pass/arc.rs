@@ -233,30 +233,24 @@ pub(super) fn guide_chords<T: Real>(
         fl = z;
         ml = z;
         // one prediction per gap (every cable's, when the routes run disk to disk)
-        let mut gap: Option<((f64, usize), Gap<T>)> = None;
-        for &(j, k) in &plan.guide_cables[g] {
-            let c = &plan.cables[j];
-            if !c.tensioned || k + 1 >= c.len {
-                continue;
-            }
-            let key = c.gap[k];
-            if gap.as_ref().is_some_and(|(kk, _)| *kk != key) {
+        let mut gap: Option<Gap<T>> = None;
+        for a in &plan.arc_chords[g] {
+            if a.new_gap {
                 gap = None;
             }
-            let (_, gp) = gap
-                .get_or_insert_with(|| (key, predict_gap(key.0, &plan.coeffs[key.1], &nl, &mlp)));
-            let rho = &c.hole_local[k];
-            let d = gp.tau + mat_vec_f64(&gp.e, &c.hole_local[k + 1]) - v3::<T>(rho);
+            let gp =
+                gap.get_or_insert_with(|| predict_gap(a.gap.0, &plan.coeffs[a.gap.1], &nl, &mlp));
+            let d = gp.tau + mat_vec_f64(&gp.e, &a.rho_next) - v3::<T>(&a.rho);
             // t d / |d| (as `unit(d) * t`, with one product fewer per component)
             let dd = d.dot(&d);
             let f = if dd.re() > 0.0 {
-                let s = buf.arc_t[j] / dd.sqrt();
+                let s = buf.arc_t[a.cable] / dd.sqrt();
                 d.map(|x| x * s)
             } else {
                 d
             };
             fl += f;
-            ml += f64_cross(rho, &f);
+            ml += f64_cross(&a.rho, &f);
         }
     }
     y.n -= jn + mat_vec(&y.rot, &fl);
