@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ws.set_tendon_settings(cablesense::tendons::TendonSettings {
             tolerance_m: tol,
             ..Default::default()
-        });
+        })?;
     }
     let mut parser = scene.readings_parser(&ws);
     let text = std::fs::read_to_string(data)?;

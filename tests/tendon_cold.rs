@@ -57,10 +57,12 @@ fn cold_from_the_reference_matches_the_warm_chain_and_forgets_history() {
     let mut warm = scene.tendon_workspace().expect("workspace");
     let mut cold = scene.tendon_workspace().expect("workspace");
     let mut nested = scene.tendon_workspace().expect("workspace");
-    nested.set_tendon_settings(TendonSettings {
-        joint_newton: false,
-        ..TendonSettings::default()
-    });
+    nested
+        .set_tendon_settings(TendonSettings {
+            joint_newton: false,
+            ..TendonSettings::default()
+        })
+        .expect("valid settings");
     let rows = rows(&scene, &warm);
     assert!(rows.len() > 400, "{} rows", rows.len());
     let (mut work_cold, mut work_nested) = (0, 0);

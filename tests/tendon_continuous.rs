@@ -366,10 +366,12 @@ fn mixed_disk_and_continuous_tendons_converge_and_obey_their_law() {
     let sc = mixed();
     let mut joint = sc.tendon_workspace().unwrap();
     let mut nested = sc.tendon_workspace().unwrap();
-    nested.set_tendon_settings(TendonSettings {
-        joint_newton: false,
-        ..TendonSettings::default()
-    });
+    nested
+        .set_tendon_settings(TendonSettings {
+            joint_newton: false,
+            ..TendonSettings::default()
+        })
+        .expect("valid settings");
     let l0 = joint.rest_free_lengths().to_vec();
     assert_eq!(joint.driven(), &[0, 1, 2, 3]);
     let mut worst = 0.0f64;

@@ -31,7 +31,8 @@ fn chain(tol_m: f64, rows: usize) -> (Vec<nalgebra::Vector3<f64>>, usize) {
     ws.set_tendon_settings(TendonSettings {
         tolerance_m: tol_m,
         ..Default::default()
-    });
+    })
+    .expect("valid settings");
     chain_ws(&scene, ws, rows)
 }
 
@@ -140,4 +141,51 @@ fn a_control_loop_tolerance_pair_costs_fewer_passes() {
         assert!(d <= 1e-6, "row {k}: tip {d:e} m from the default's");
     }
     assert_eq!(tips_l.len(), tips0.len());
+}
+
+/// The API checks what a scene's table is checked for: a bad value is refused with
+/// its field named, and the settings in effect do not change.
+#[test]
+fn set_tendon_settings_refuses_a_bad_value_and_keeps_the_last() {
+    let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+    let mut ws = scene.tendon_workspace().expect("workspace");
+    let good = TendonSettings {
+        tolerance_m: 1e-9,
+        ..Default::default()
+    };
+    ws.set_tendon_settings(good).expect("valid settings");
+    for (bad, field) in [
+        (
+            TendonSettings {
+                tolerance_m: f64::NAN,
+                ..Default::default()
+            },
+            "numerics.tendons.tolerance_m",
+        ),
+        (
+            TendonSettings {
+                tolerance_m: -1e-9,
+                ..Default::default()
+            },
+            "numerics.tendons.tolerance_m",
+        ),
+        (
+            TendonSettings {
+                max_iterations: 0,
+                ..Default::default()
+            },
+            "numerics.tendons.max_iterations",
+        ),
+        (
+            TendonSettings {
+                max_shooting_solves: 0,
+                ..Default::default()
+            },
+            "numerics.tendons.max_shooting_solves",
+        ),
+    ] {
+        let err = ws.set_tendon_settings(bad).expect_err(field).to_string();
+        assert!(err.contains(field), "{field}: {err}");
+        assert_eq!(ws.tendon_settings(), &good, "{field}");
+    }
 }

@@ -299,14 +299,16 @@ fn a_row_stops_at_its_budget_of_forward_solves() {
         w.set_tendon_settings(TendonSettings {
             max_shooting_solves: budget,
             ..TendonSettings::default()
-        });
+        })
+        .expect("valid settings");
         let rep = w
             .solve_readings(&[0.082, -0.052, 0.051, 0.002, -0.001, -0.001])
             .expect("finite readings");
         assert!(rep.shooting_solves <= budget, "{budget}: {rep:?}");
         assert_eq!(rep.status, SolveStatus::MaxIterations, "{budget}: {rep:?}");
         // the next row, from cold (a stream's fallback) and then warm
-        w.set_tendon_settings(TendonSettings::default());
+        w.set_tendon_settings(TendonSettings::default())
+            .expect("valid settings");
         let rep = w
             .solve_readings_from(&reachable, Start::Cold)
             .expect("valid readings");

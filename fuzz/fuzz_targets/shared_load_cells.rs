@@ -72,7 +72,8 @@ fn template(robot: Robot) -> &'static (Scene, TendonLoadEstimator) {
     cell.get_or_init(|| {
         let scene = scene(robot);
         let mut est = load_cells::estimator(&scene).expect("scene builds");
-        est.set_tendon_settings(shared_tdcr::tendon_settings());
+        est.set_tendon_settings(shared_tdcr::tendon_settings())
+            .expect("the fuzz budget is valid");
         (scene, est)
     })
 }

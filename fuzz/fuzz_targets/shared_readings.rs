@@ -53,7 +53,8 @@ fn template(robot: Robot) -> &'static (Scene, TendonWorkspace) {
     cell.get_or_init(|| {
         let scene = shared_tdcr::scene(SCENE, robot);
         let mut ws = scene.tendon_workspace().expect("scene builds");
-        ws.set_tendon_settings(shared_tdcr::tendon_settings());
+        ws.set_tendon_settings(shared_tdcr::tendon_settings())
+            .expect("the fuzz budget is valid");
         (scene, ws)
     })
 }

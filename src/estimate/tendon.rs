@@ -392,9 +392,13 @@ impl TendonLoadEstimator {
     }
 
     /// Settings of the tendon iteration inside every forward solve (budget,
-    /// tolerance; default [`crate::tendons::TendonSettings::default`]).
-    pub fn set_tendon_settings(&mut self, settings: crate::tendons::TendonSettings) {
-        self.est.ws.tendons_mut().set_tendon_settings(settings);
+    /// tolerance; default [`crate::tendons::TendonSettings::default`]). An error
+    /// names the field that is out of range; the settings then stay as they were.
+    pub fn set_tendon_settings(
+        &mut self,
+        settings: crate::tendons::TendonSettings,
+    ) -> Result<(), crate::error::ModelError> {
+        self.est.ws.tendons_mut().set_tendon_settings(settings)
     }
 
     /// Names of the driven tendons, in reading order.

@@ -284,8 +284,12 @@ impl TendonWorkspace {
     }
 
     /// Replace the tendon settings (they start as the scene's `numerics.tendons`).
-    pub fn set_tendon_settings(&mut self, settings: TendonSettings) {
+    /// Checked as a scene's are ([`TendonSettings::validate`]): an error names the
+    /// field, and the settings in effect stay as they were.
+    pub fn set_tendon_settings(&mut self, settings: TendonSettings) -> Result<(), ModelError> {
+        settings.validate()?;
         self.settings = settings;
+        Ok(())
     }
     /// The tendon settings in effect.
     pub fn tendon_settings(&self) -> &TendonSettings {
