@@ -561,3 +561,52 @@ impl Plan {
         (f, m)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Scene;
+
+    /// The arc coupling's per-guide chord lists hold exactly the tensioned cables that
+    /// go on from the guide, in `guide_cables` order, with their two hole vectors and
+    /// gap, and a "new gap" flag on the first chord of each gap; other couplings have
+    /// empty lists. On the demo scene (two of six cables tensioned, two sections of
+    /// four guides).
+    #[test]
+    fn arc_chord_lists_hold_the_tensioned_cables_that_go_on() {
+        let scene = Scene::load("data/scenes/demo_two_section.toml").expect("shipped scene");
+        let robot = scene.build_robot().expect("robot");
+        let arc = SolverSettings {
+            cable_coupling: CableCoupling::Arc,
+            ..scene.numerics.clone()
+        };
+        let plan = Plan::new(&robot, &scene.loads, &arc, &[]).expect("plan");
+        let mut chords = 0;
+        for (g, list) in plan.guide_cables.iter().enumerate() {
+            let got = &plan.arc_chords[g];
+            let want: Vec<(usize, usize)> = list
+                .iter()
+                .copied()
+                .filter(|&(j, k)| plan.cables[j].tensioned && k + 1 < plan.cables[j].len)
+                .collect();
+            assert_eq!(got.len(), want.len(), "guide {g}");
+            for (i, (a, &(j, k))) in got.iter().zip(&want).enumerate() {
+                let c = &plan.cables[j];
+                assert_eq!(a.cable, j, "guide {g}");
+                assert_eq!(a.rho, c.hole_local[k], "guide {g} cable {j}");
+                assert_eq!(a.rho_next, c.hole_local[k + 1], "guide {g} cable {j}");
+                assert_eq!(a.gap, c.gap[k], "guide {g} cable {j}");
+                assert_eq!(a.new_gap, i == 0 || got[i - 1].gap != a.gap, "guide {g}");
+            }
+            chords += got.len();
+        }
+        // cables 0 and 4 are tensioned; each goes on from every guide of its route
+        // but the last
+        let want: usize = [0, 4].iter().map(|&j| plan.cables[j].len - 1).sum();
+        assert!(want > 0);
+        assert_eq!(chords, want);
+        let condensed = Plan::new(&robot, &scene.loads, &scene.numerics, &[]).expect("plan");
+        assert!(!condensed.arc);
+        assert!(condensed.arc_chords.iter().all(|c| c.is_empty()));
+    }
+}
