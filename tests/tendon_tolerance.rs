@@ -188,4 +188,14 @@ fn set_tendon_settings_refuses_a_bad_value_and_keeps_the_last() {
         assert!(err.contains(field), "{field}: {err}");
         assert_eq!(ws.tendon_settings(), &good, "{field}");
     }
+    // one copy of the settings: the inner workspace's `numerics.tendons` is what runs,
+    // whichever way it was set
+    assert_eq!(&ws.workspace().settings().tendons, &good);
+    let mut numerics = ws.workspace().settings().clone();
+    numerics.tendons.max_iterations = 7;
+    ws.workspace_mut()
+        .set_settings(numerics)
+        .expect("valid settings");
+    assert_eq!(ws.tendon_settings().max_iterations, 7);
+    assert_eq!(ws.tendon_settings().tolerance_m, good.tolerance_m);
 }

@@ -230,6 +230,12 @@ impl Workspace {
     pub fn settings(&self) -> &SolverSettings {
         &self.settings
     }
+    /// Replace [`SolverSettings::tendons`] alone: the shooting solve never reads
+    /// them (only the owning [`crate::tendons::TendonWorkspace`] does), so nothing is
+    /// rebuilt. The caller has validated them.
+    pub(crate) fn set_tendon_settings(&mut self, tendons: crate::settings::TendonSettings) {
+        self.settings.tendons = tendons;
+    }
     /// Report of the last solve.
     pub fn report(&self) -> &SolveReport {
         &self.report

@@ -113,7 +113,6 @@ pub struct TendonWorkspace {
     /// Scaled shooting unknowns of the reference equilibrium (zero readings, the
     /// pretensions): where a cold solve's joint path starts.
     x_ref: Vec<f64>,
-    settings: TendonSettings,
     report: TendonReport,
     joint: joint::JointBufs,
 }
@@ -197,7 +196,6 @@ impl TendonWorkspace {
         let routes: Vec<usize> = robot.cables().iter().map(|c| c.route.len()).collect();
         let mu = robot.friction_mu();
         let deadband = robot.spec().friction.as_ref().map_or(0.0, |f| f.deadband_m);
-        let tendon_settings = settings.tendons;
         let ws = Workspace::with_params(robot, loads, settings, &params)?;
         let p = driven.len();
         let np = params.len();
@@ -229,7 +227,6 @@ impl TendonWorkspace {
             mean_factor: vec![1.0; p],
             has_solution: false,
             x_ref: Vec::new(),
-            settings: tendon_settings,
             report: TendonReport {
                 status: SolveStatus::NonFinite,
                 iterations: 0,
@@ -288,12 +285,15 @@ impl TendonWorkspace {
     /// field, and the settings in effect stay as they were.
     pub fn set_tendon_settings(&mut self, settings: TendonSettings) -> Result<(), ModelError> {
         settings.validate()?;
-        self.settings = settings;
+        self.ws.set_tendon_settings(settings);
         Ok(())
     }
-    /// The tendon settings in effect.
+    /// The tendon settings in effect: the inner workspace's
+    /// [`SolverSettings::tendons`], their only copy (so that
+    /// `workspace().settings()` and a `workspace_mut().set_settings(..)` agree with
+    /// what this workspace runs).
     pub fn tendon_settings(&self) -> &TendonSettings {
-        &self.settings
+        &self.ws.settings().tendons
     }
     /// Cable indices of the displacement-driven tendons, in reading order.
     pub fn driven(&self) -> &[usize] {
@@ -433,7 +433,7 @@ impl TendonWorkspace {
         // the warm fast path (mu = 0, or friction factors that stay put)
         self.joint.cold = start == Start::Cold;
         if start == Start::Warm
-            && self.settings.joint_newton
+            && self.tendon_settings().joint_newton
             && self.solve_joint()
             && self.refresh_factors()
         {
@@ -449,7 +449,7 @@ impl TendonWorkspace {
         // solve costs ~1e5 `f64` right-hand sides a row (its shooting continuation
         // and branch checks at every tension iterate), the path from the reference
         // a few thousand.
-        if start == Start::Cold && self.settings.joint_newton && !self.x_ref.is_empty() {
+        if start == Start::Cold && self.tendon_settings().joint_newton && !self.x_ref.is_empty() {
             self.joint.free_prev.copy_from_slice(&self.free0);
             self.ws.adopt_unknowns(&self.x_ref, false);
             self.joint.forget_jacobian();

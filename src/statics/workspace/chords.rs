@@ -48,9 +48,10 @@ impl Workspace {
     /// Condensed coupling: tolerance of the next-hole settle of the following `f64`
     /// passes, as a fraction of the rod length ([`Self::settle_tolerance`]: clamped to
     /// `[LOCAL_TOL, 1e-9]`, or `LOCAL_TOL` on a plan without a settle; `LOCAL_TOL` =
-    /// 1e-15 is the default and what every solve ends with); returns the value set. For an outer iteration that evaluates points far from its
-    /// solution (inexact Newton: an inner error far below the outer residual does not
-    /// change the step); the caller restores `LOCAL_TOL` before it reports a point.
+    /// 1e-15 is the default and what every solve ends with); returns the value set.
+    /// For an outer iteration that evaluates points far from its solution (inexact
+    /// Newton: an inner error far below the outer residual does not change the step);
+    /// the caller restores `LOCAL_TOL` before it reports a point.
     pub(crate) fn set_local_tolerance(&mut self, frac: f64) -> f64 {
         let t = self.settle_tolerance(frac);
         self.b64.local_tol = t;

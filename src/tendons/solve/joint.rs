@@ -514,7 +514,7 @@ impl TendonWorkspace {
         self.ws.cable_lengths_into(&mut self.lengths);
         self.update_g();
         let tol = self.ws.report().tolerance;
-        let tol_g = self.settings.tolerance_m;
+        let tol_g = self.tendon_settings().tolerance_m;
         let n = self.joint.x.len();
         self.joint.f_now[..n].copy_from_slice(self.ws.residual_vector());
         self.joint.f_now[n..].copy_from_slice(&self.g);

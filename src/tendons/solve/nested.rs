@@ -25,7 +25,7 @@ impl TendonWorkspace {
         // failed step, a step that contracted |G| by less than 10x, or a change of the
         // active set; otherwise a chord step reuses the last factorisation
         let mut need_fresh = true;
-        for it in 0..self.settings.max_iterations {
+        for it in 0..self.tendon_settings().max_iterations {
             self.report.iterations = it;
             let friction_settled = self.refresh_factors();
             if !friction_settled {
@@ -36,7 +36,7 @@ impl TendonWorkspace {
                 }
                 merit = self.merit();
             }
-            if merit <= self.settings.tolerance_m && friction_settled {
+            if merit <= self.tendon_settings().tolerance_m && friction_settled {
                 // a slack tendon carries exactly nothing: a damped step can leave a
                 // tension below tolerance / a_i on the slack branch; drop it and check
                 if !self.zero_slack_tensions() {
@@ -75,7 +75,7 @@ impl TendonWorkspace {
                 }
                 if self.evaluate(Start::Warm, false) {
                     let m = self.merit();
-                    if m < merit || m <= self.settings.tolerance_m {
+                    if m < merit || m <= self.tendon_settings().tolerance_m {
                         merit = m;
                         accepted = true;
                         break;
@@ -101,8 +101,8 @@ impl TendonWorkspace {
                 }
             }
         }
-        self.report.iterations = self.settings.max_iterations;
-        if self.merit() <= self.settings.tolerance_m && self.refresh_factors() {
+        self.report.iterations = self.tendon_settings().max_iterations;
+        if self.merit() <= self.tendon_settings().tolerance_m && self.refresh_factors() {
             self.report.status = SolveStatus::Converged;
         }
         self.finish()
@@ -112,7 +112,7 @@ impl TendonWorkspace {
     /// `false` when the shooting solve or the sweep failed.
     fn evaluate(&mut self, start: Start, sweep: bool) -> bool {
         let p = self.driven.len();
-        if self.report.shooting_solves >= self.settings.max_shooting_solves {
+        if self.report.shooting_solves >= self.tendon_settings().max_shooting_solves {
             self.report.status = SolveStatus::MaxIterations;
             return false;
         }

@@ -132,7 +132,7 @@ impl TendonWorkspace {
         }
         self.update_g();
         let tol = self.ws.report().tolerance;
-        let tol_g = self.settings.tolerance_m;
+        let tol_g = self.tendon_settings().tolerance_m;
         let g_max = self.merit();
         self.joint.f_now[n..].copy_from_slice(&self.g);
         let (l2_0, settle0) = self.joint_norms(tol);
