@@ -613,6 +613,75 @@ fn readings_on_a_scene_without_tendons_names_the_scene() {
     );
 }
 
+/// Run the binary with stdout and stderr in files, stdin from `stdin` (a path opened
+/// for reading) or null, killed after `secs` seconds: for cases whose regression is
+/// an endless loop. (code, stdout, stderr); code -1 if it had to be killed.
+fn run_bounded(args: &[&str], stdin: Option<&str>, secs: u64) -> Run {
+    let dir = TempDir::new("bounded");
+    let out = dir.0.join("stdout");
+    let err = dir.0.join("stderr");
+    let mut child = Command::new(BIN)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdin(match stdin {
+            Some(p) => Stdio::from(std::fs::File::open(p).unwrap()),
+            None => Stdio::null(),
+        })
+        .stdout(Stdio::from(std::fs::File::create(&out).unwrap()))
+        .stderr(Stdio::from(std::fs::File::create(&err).unwrap()))
+        .spawn()
+        .expect("the binary starts");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(secs);
+    let code = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status.code().unwrap_or(-2);
+        }
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            break -1;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let head = |p: &Path| {
+        let bytes = std::fs::read(p).unwrap_or_default();
+        String::from_utf8_lossy(&bytes[..bytes.len().min(4000)]).into_owned()
+    };
+    Run {
+        code,
+        stdout: head(&out),
+        stderr: head(&err),
+    }
+}
+
+/// Found by audit 23: a directory given as the rows file (or as standard input) was
+/// opened (Linux allows it), every read of it failed, and the stream reported
+/// "unreadable line" for line 1, 2, 3, ... forever. Now an error naming the path
+/// (a directory on standard input: the read error, once).
+#[test]
+fn rows_file_that_is_a_directory_is_an_error_not_an_endless_stream() {
+    let dir = TempDir::new("rowsdir");
+    let d = dir.0.display().to_string();
+    let load_cells = repo("data/load_cells/tdcr_load_cells.toml");
+    for args in [
+        vec!["solve", TDCR, "--readings", &d],
+        vec!["track", TDCR, "--input", &d],
+        vec!["track", TRACK, "--input", &d],
+        vec!["track", &load_cells, "--input", &d],
+        vec!["estimate", TRACK, "--measure", &d],
+        vec!["estimate", &load_cells, "--measure", &d],
+    ] {
+        let r = run_bounded(&args, None, 20);
+        assert_ne!(r.code, -1, "{args:?} did not stop: {}", r.stdout);
+        assert_error(&r, &[&d, "directory"]);
+    }
+    for scene in [TDCR, TRACK, &load_cells] {
+        let r = run_bounded(&["track", scene], Some(&d), 20);
+        assert_ne!(r.code, -1, "track {scene} < DIR did not stop: {}", r.stdout);
+        assert_error(&r, &["reading line 1", "directory"]);
+    }
+}
+
 // ---------------------------------------------------------------------------------
 // Calibration recordings (`calibrate` of the shipped demo on a 19-row recording)
 // ---------------------------------------------------------------------------------

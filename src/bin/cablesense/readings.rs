@@ -252,7 +252,9 @@ fn next_row(
     output: Output,
     bad: &mut usize,
 ) -> std::io::Result<Option<ReadingRow>> {
-    let parsed = match line {
+    let parsed = match crate::stream::stream_line(line, no)
+        .map_err(|e| std::io::Error::other(format!("{e:#}")))?
+    {
         Ok(l) => parser.line(no, &l),
         Err(e) => {
             *bad += 1;

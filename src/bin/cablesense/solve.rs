@@ -65,8 +65,7 @@ fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Re
         a.scene.display()
     );
     let open = || -> anyhow::Result<Box<dyn std::io::BufRead>> {
-        let file =
-            std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
+        let file = crate::stream::open_file(path)?;
         Ok(Box::new(std::io::BufReader::new(file)))
     };
     let output = if a.json { Output::Json } else { Output::Text };

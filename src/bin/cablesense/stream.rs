@@ -47,11 +47,34 @@ pub fn estimator(scene_path: &Path, model: &str) -> anyhow::Result<(Scene, Scene
 /// Open an input file (`demo:NAME` for a shipped one) for reading by lines.
 pub fn open_input(arg: &Path) -> anyhow::Result<Box<dyn std::io::BufRead>> {
     Ok(match DataRef::parse(arg)? {
-        DataRef::Path(p) => Box::new(std::io::BufReader::new(
-            std::fs::File::open(&p).with_context(|| format!("cannot open {}", p.display()))?,
-        )),
+        DataRef::Path(p) => Box::new(std::io::BufReader::new(open_file(&p)?)),
         DataRef::Demo(f) => Box::new(std::io::Cursor::new(f.text.as_bytes())),
     })
+}
+
+/// Open a file of rows for reading. A directory is refused here: `File::open`
+/// accepts one on Linux and every read of it then fails, so a stream reading it
+/// line by line would report an unreadable line forever.
+pub fn open_file(p: &Path) -> anyhow::Result<std::fs::File> {
+    let file = std::fs::File::open(p).with_context(|| format!("cannot open {}", p.display()))?;
+    if file.metadata().is_ok_and(|m| m.is_dir()) {
+        anyhow::bail!("{} is a directory, not a file of rows", p.display());
+    }
+    Ok(file)
+}
+
+/// A line of a row stream: a line that is not UTF-8 is reported and skipped (the
+/// stream goes on, `Ok(Err(..))`); any other read error stops the stream, since
+/// reading on would fail the same way for every later line.
+pub fn stream_line(
+    line: std::io::Result<String>,
+    line_no: usize,
+) -> anyhow::Result<Result<String, std::io::Error>> {
+    match line {
+        Ok(l) => Ok(Ok(l)),
+        Err(e) if e.kind() == std::io::ErrorKind::InvalidData => Ok(Err(e)),
+        Err(e) => Err(anyhow::Error::new(e).context(format!("reading line {line_no}"))),
+    }
 }
 
 /// A parser for the scene's cable names.

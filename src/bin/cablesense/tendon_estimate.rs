@@ -134,7 +134,7 @@ pub fn stream(
     let (mut rows, mut poor, mut bad) = (0, 0, 0);
     let mut start = est.estimator().theta().to_vec();
     for (i, line) in reader.lines().enumerate() {
-        let line = match line {
+        let line = match crate::stream::stream_line(line, i + 1)? {
             Ok(l) => l,
             Err(e) => {
                 bad += 1;

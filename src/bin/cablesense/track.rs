@@ -89,7 +89,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     for (i, line) in reader.lines().enumerate() {
-        let line = match line {
+        let line = match crate::stream::stream_line(line, i + 1)? {
             Ok(l) => l,
             Err(e) => {
                 writeln!(
