@@ -850,6 +850,72 @@ fn cli_track_without_estimate_table_names_the_scene() {
     assert_error(&r, &["demo_two_section.toml", "no [estimate] table"]);
 }
 
+/// Found by audit 23: a line that is not UTF-8 stopped `estimate` (exit 2) and
+/// `solve --readings --model auto` ("error: stream did not contain valid UTF-8",
+/// naming no line), where `track` and `solve --readings` report it and go on.
+#[test]
+fn non_utf8_line_is_reported_and_the_rows_after_it_are_read() {
+    let dir = TempDir::new("utf8");
+    let enc = dir.0.join("enc.csv");
+    let mut bytes = shipped("data/measurements/track_demo.csv")
+        .lines()
+        .take(5)
+        .map(|l| format!("{l}\n"))
+        .collect::<String>()
+        .into_bytes();
+    let good_rows = 3; // lines 3..=5: header on line 2 after the comment
+    bytes.extend_from_slice(b"\xff\xfe,1,2\n");
+    bytes.extend_from_slice(
+        shipped("data/measurements/track_demo.csv")
+            .lines()
+            .nth(5)
+            .unwrap()
+            .as_bytes(),
+    );
+    bytes.push(b'\n');
+    std::fs::write(&enc, bytes).unwrap();
+    let enc = enc.display().to_string();
+    let r = run(&["estimate", TRACK, "--measure", &enc, "--json"]);
+    assert_eq!(r.code, 1, "a bad line is counted: {}", r.stderr);
+    let rows: Vec<serde_json::Value> = r
+        .stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_row_error(&rows, 6, "line", &["not", "UTF-8"]);
+    let estimated = rows.iter().filter(|v| v.get("status").is_some()).count();
+    assert_eq!(estimated, good_rows + 1, "{}", r.stdout);
+
+    let rd = dir.0.join("rd.csv");
+    let mut bytes = format!("{RD_HEADER}0,0,0,0,0,0,0\n").into_bytes();
+    bytes.extend_from_slice(b"\xff\xfe\n0.1,0.001,0,0,0,0,0\n");
+    std::fs::write(&rd, bytes).unwrap();
+    let rd = rd.display().to_string();
+    // (one probe row: ranking the ladder costs seconds a row)
+    let r = run(&[
+        "solve",
+        TDCR,
+        "--readings",
+        &rd,
+        "--model",
+        "auto",
+        "--probe-rows",
+        "1",
+        "--json",
+    ]);
+    assert_ne!(r.code, 2, "the stream goes on: {}", r.stderr);
+    let rows: Vec<serde_json::Value> = r
+        .stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(rows[0].get("model_choice").is_some(), "{}", r.stdout);
+    assert_row_error(&rows, 3, "line", &["UTF-8"]);
+    assert!(rows
+        .iter()
+        .any(|v| v["line"] == 4 && v.get("status").is_some()));
+}
+
 #[test]
 fn cli_unwritable_output_names_the_path() {
     let r = run(&["solve", "--samples", "/nonexistent-dir/x/samples.csv"]);

@@ -135,7 +135,11 @@ fn choose_for_readings(
     let mut parser = scene.readings_parser(&ws);
     let mut rows = Vec::new();
     for (i, line) in reader.lines().enumerate() {
-        if let Ok(Some(r)) = parser.line(i + 1, &line?) {
+        // a line that is not UTF-8 is skipped like a bad row (the stream reports it)
+        let Ok(line) = crate::stream::stream_line(line, i + 1)? else {
+            continue;
+        };
+        if let Ok(Some(r)) = parser.line(i + 1, &line) {
             rows.push(r.readings_m);
         }
     }
