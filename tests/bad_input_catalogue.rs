@@ -850,6 +850,39 @@ fn cli_track_without_estimate_table_names_the_scene() {
     assert_error(&r, &["demo_two_section.toml", "no [estimate] table"]);
 }
 
+/// Found by audit 23: options the readings streams do not use were accepted and
+/// ignored (exit 0): `track` on a tendon scene with `--model bogus` or `--plot DIR`
+/// (no figure written), `solve --readings` with `--plot` (no figure written), and
+/// `--probe-rows 0`.
+#[test]
+fn cli_options_a_readings_stream_would_ignore_are_refused() {
+    let dir = TempDir::new("ignored");
+    let rows = dir.file("r.csv", &format!("{RD_HEADER}0,0,0,0,0,0,0\n"));
+    let figs = dir.0.join("figs").display().to_string();
+    let load_cells = repo("data/load_cells/tdcr_load_cells.toml");
+    for scene in [TDCR, &load_cells] {
+        let r = run(&["track", scene, "--input", &rows, "--model", "bogus"]);
+        assert_error(&r, &["--model bogus", "--model scene"]);
+        let r = run(&["track", scene, "--input", &rows, "--plot", &figs]);
+        assert_error(&r, &["--plot", "figs", "displacement-driven"]);
+    }
+    let svg = dir.0.join("p.svg").display().to_string();
+    let r = run(&["solve", TDCR, "--readings", &rows, "--plot", &svg]);
+    assert_error(&r, &["--plot", "p.svg", "--samples"]);
+    assert!(!dir.0.join("figs").exists() && !dir.0.join("p.svg").exists());
+    let r = run(&[
+        "solve",
+        TDCR,
+        "--readings",
+        &rows,
+        "--model",
+        "auto",
+        "--probe-rows",
+        "0",
+    ]);
+    assert_error(&r, &["--probe-rows 0"]);
+}
+
 /// Found by audit 23: a line that is not UTF-8 stopped `estimate` (exit 2) and
 /// `solve --readings --model auto` ("error: stream did not contain valid UTF-8",
 /// naming no line), where `track` and `solve --readings` report it and go on.

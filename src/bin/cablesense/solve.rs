@@ -64,6 +64,13 @@ fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Re
         "{}: no cable has actuation = \"displacement\": --readings needs displacement-driven tendons",
         a.scene.display()
     );
+    if let Some(p) = &a.plot {
+        // one figure of one solve; a readings file has a shape per row
+        anyhow::bail!(
+            "--plot {}: draws a single solve, not the rows of --readings (--samples FILE writes every row's backbone)",
+            p.display()
+        );
+    }
     let open = || -> anyhow::Result<Box<dyn std::io::BufRead>> {
         let file = crate::stream::open_file(path)?;
         Ok(Box::new(std::io::BufReader::new(file)))
@@ -131,6 +138,10 @@ fn choose_for_readings(
     reader: Box<dyn std::io::BufRead>,
 ) -> anyhow::Result<AutoChoice> {
     use std::io::BufRead;
+    anyhow::ensure!(
+        a.probe_rows >= 1,
+        "--probe-rows 0: the models are ranked on at least one row"
+    );
     let ws = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&ws);
     let mut rows = Vec::new();

@@ -41,6 +41,24 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         ),
     };
     let scene = demo::DataRef::parse(&scene_path)?.scene()?;
+    if crate::readings::is_tendon_scene(&scene) {
+        // the readings streams below run the scene's rod model and draw nothing:
+        // refuse what they would otherwise ignore
+        anyhow::ensure!(
+            a.model == "scene",
+            "--model {}: {} has displacement-driven tendons, whose stream runs the scene's own rod model (--model scene); `cablesense solve {} --readings FILE --model LABEL` solves rows on another rung",
+            a.model,
+            scene_path.display(),
+            scene_path.display()
+        );
+        if let Some(dir) = &a.plot {
+            anyhow::bail!(
+                "--plot {}: not drawn for {}, a scene with displacement-driven tendons (--plot draws the tip path of an [estimate] scene's encoder stream)",
+                dir.display(),
+                scene_path.display()
+            );
+        }
+    }
     if crate::readings::is_tendon_scene(&scene) && scene.estimate.is_none() {
         // servo readings in, shape per row out (the control-loop case)
         let reader: Box<dyn BufRead> = match &input {
@@ -58,11 +76,6 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
     if crate::readings::is_tendon_scene(&scene) {
         // servo readings and load cells in, unknown loads per row out
-        anyhow::ensure!(
-            a.model == "scene",
-            "--model {}: a scene with displacement-driven tendons is estimated on its own rod model (--model scene)",
-            a.model
-        );
         let reader: Box<dyn BufRead> = match &input {
             Some(f) => open_input(f)?,
             None => Box::new(std::io::BufReader::new(std::io::stdin())),
