@@ -277,6 +277,32 @@ fn scene_cable_end_section_past_the_robot_names_field_and_value() {
     assert_error(&r, &["end_section", "5"]);
 }
 
+/// Found by audit 23: a base axis whose squared length overflows (`[1e200, 0, 0]`)
+/// normalised to zero and the base was silently left unrotated; one whose squared
+/// length underflows (`[1e-170, 0, 0]`) was refused as "must be non-zero". Both are
+/// the x axis.
+#[test]
+fn scene_base_axis_of_extreme_length_is_its_direction() {
+    let tip = |axis: &str| {
+        let dir = TempDir::new("axis");
+        let text = shipped(TDCR).replace(
+            "[loads]",
+            &format!("[robot.base]\naxis = {axis}\nangle_deg = 90.0\n\n[loads]"),
+        );
+        let path = dir.file("s.toml", &text);
+        let r = run(&["solve", &path, "--json"]);
+        assert_eq!(r.code, 0, "{axis}: {}", r.stderr);
+        let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+        let tips = v["solution"]["section_tips"].as_array().unwrap().clone();
+        tips.last().unwrap()["position"].clone()
+    };
+    let unit = tip("[1.0, 0.0, 0.0]");
+    // rotated by 90 degrees about x: the backbone runs along -y
+    assert!(unit[1].as_f64().unwrap() < -0.1, "{unit}");
+    assert_eq!(tip("[1e200, 0.0, 0.0]"), unit);
+    assert_eq!(tip("[1e-170, 0.0, 0.0]"), unit);
+}
+
 #[test]
 fn scene_zero_rk4_steps_names_field_and_value() {
     let r = solve_scene(

@@ -181,7 +181,12 @@ impl Robot {
                 path: None,
             });
         }
-        let axis = Vector3::from(spec.base.axis);
+        let mut axis = Vector3::from(spec.base.axis);
+        if !axis.norm_squared().is_normal() {
+            // |axis|^2 overflows (1e200) or underflows (1e-170): scale it first, or
+            // `normalize` would give a zero or NaN axis (the base silently unrotated)
+            axis /= axis.amax();
+        }
         let base_rotation = exp_so3(&(axis.normalize() * spec.base.angle_deg.to_radians()));
         Ok(Self {
             base_position: Vector3::from(spec.base.position_m),

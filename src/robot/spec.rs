@@ -299,8 +299,7 @@ impl RobotSpec {
         ModelError::finite3("robot.base.position_m", &self.base.position_m)?;
         ModelError::finite3("robot.base.axis", &self.base.axis)?;
         ModelError::finite("robot.base.angle_deg", self.base.angle_deg)?;
-        let a = self.base.axis;
-        if a[0] * a[0] + a[1] * a[1] + a[2] * a[2] == 0.0 {
+        if self.base.axis.iter().all(|x| *x == 0.0) {
             return Err(ModelError::Invalid {
                 field: "robot.base.axis".into(),
                 why: "must be non-zero".into(),
