@@ -277,6 +277,28 @@ fn scene_cable_end_section_past_the_robot_names_field_and_value() {
     assert_error(&r, &["end_section", "5"]);
 }
 
+/// Found by audit 23: two cables of one name (or two tendons reading one column)
+/// were accepted, and every readings row then failed with "s1a: missing" although
+/// the column was there (the second cable of the name never got it).
+#[test]
+fn scene_duplicate_cable_name_or_reading_column_names_both_cables() {
+    let r = solve_scene(
+        "dupname",
+        "s.toml",
+        &scene_with(TDCR, "name = \"s1b\"", "name = \"s1a\""),
+    );
+    assert_error(
+        &r,
+        &["robot.cables[1].name", "`s1a`", "robot.cables[0]", "unique"],
+    );
+    let r = solve_scene(
+        "dupreading",
+        "s.toml",
+        &scene_with(TDCR, "name = \"s1b\"", "name = \"s1b\"\nreading = \"s1a\""),
+    );
+    assert_error(&r, &["robot.cables[1].reading", "`s1a`", "robot.cables[0]"]);
+}
+
 /// Found by audit 23: a base axis whose squared length overflows (`[1e200, 0, 0]`)
 /// normalised to zero and the base was silently left unrotated; one whose squared
 /// length underflows (`[1e-170, 0, 0]`) was refused as "must be non-zero". Both are

@@ -181,6 +181,7 @@ impl Robot {
                 path: None,
             });
         }
+        Self::check_unique_names(&cables)?;
         let mut axis = Vector3::from(spec.base.axis);
         if !axis.norm_squared().is_normal() {
             // |axis|^2 overflows (1e200) or underflows (1e-170): scale it first, or
@@ -196,6 +197,41 @@ impl Robot {
             cables,
             base_rotation,
         })
+    }
+
+    /// Cable names (given or defaulted) are unique, and so are the readings columns
+    /// of the displacement-driven tendons: readings, load-cell (`tension_<cable>`),
+    /// length (`length_<cable>`) and encoder columns are found by these names, so a
+    /// second cable of the same name would never get its column.
+    fn check_unique_names(cables: &[Cable]) -> Result<(), ModelError> {
+        let driven = |c: &Cable| c.actuation == Actuation::Displacement;
+        for (j, c) in cables.iter().enumerate() {
+            if let Some(i) = cables[..j].iter().position(|d| d.name == c.name) {
+                return Err(ModelError::Invalid {
+                    field: format!("robot.cables[{j}].name"),
+                    why: format!(
+                        "`{}` is also the name of robot.cables[{i}]: cable names must be unique (columns of readings, load cells and encoders are found by them)",
+                        c.name
+                    ),
+                });
+            }
+            if !driven(c) {
+                continue;
+            }
+            if let Some(i) = cables[..j]
+                .iter()
+                .position(|d| driven(d) && d.reading == c.reading)
+            {
+                return Err(ModelError::Invalid {
+                    field: format!("robot.cables[{j}].reading"),
+                    why: format!(
+                        "column `{}` is also the reading of robot.cables[{i}]: each displacement-driven tendon needs its own readings column",
+                        c.reading
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// A continuously routed tendon from the base to the end of its `end_section`;
