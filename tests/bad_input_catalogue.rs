@@ -412,6 +412,28 @@ fn scene_unknown_demo_names_it() {
     assert_error(&r, &["demo:scenes/nope.toml", "demo list"]);
 }
 
+/// Found by audit 23: the same load twice in `[[estimate.unknowns]]` was accepted;
+/// every row then came out "stalled" with standard deviations `inf` (the encoders
+/// see only the sum of the two), and the reports, keyed by name, showed one column
+/// twice.
+#[test]
+fn scene_same_unknown_twice_names_both_unknowns() {
+    let dir = TempDir::new("dupunknown");
+    let rows = dir.file("m.csv", &format!("{ENC_HEADER}{ENC_GOOD}"));
+    let path = dir.file("s.toml", &scene_with(TRACK, "axis = \"z\"", "axis = \"y\""));
+    let r = run(&["estimate", &path, "--measure", &rows]);
+    assert_error(
+        &r,
+        &["estimate.unknowns[1]", "estimate.unknowns[0]", "force_y@s0"],
+    );
+    let path = dir.file(
+        "n.toml",
+        &scene_with(TRACK, "axis = \"z\"", "axis = \"z\"\nname = \"force_y@s0\""),
+    );
+    let r = run(&["estimate", &path, "--measure", &rows]);
+    assert_error(&r, &["estimate.unknowns[1].name", "`force_y@s0`", "unique"]);
+}
+
 /// A load the solver cannot reach (a 15 kN cable pull on the 1.56 mm demo rod):
 /// `solve` reports a failure status and exits 1; nothing claims convergence.
 #[test]

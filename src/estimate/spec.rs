@@ -336,6 +336,34 @@ impl EstimateSpec {
                     why: format!("exceeds max = {}", u.upper()),
                 });
             }
+            // one load twice: the data see only the sum of the two, so neither can be
+            // estimated (and reports keyed by name would show one of them)
+            let site = |u: &UnknownSpec| match u.kind {
+                UnknownKind::Tension => (u.kind, u.cable, None, None),
+                UnknownKind::Mass => (u.kind, None, u.section, None),
+                _ => (u.kind, None, u.section, u.axis),
+            };
+            if let Some(j) = self.unknowns[..i].iter().position(|v| site(v) == site(u)) {
+                return Err(ModelError::Invalid {
+                    field: f.clone(),
+                    why: format!(
+                        "the same load as estimate.unknowns[{j}] ({}): each load can be an unknown once",
+                        self.unknowns[j].display_name()
+                    ),
+                });
+            }
+            let name = u.display_name();
+            if let Some(j) = self.unknowns[..i]
+                .iter()
+                .position(|v| v.display_name() == name)
+            {
+                return Err(ModelError::Invalid {
+                    field: format!("{f}.name"),
+                    why: format!(
+                        "`{name}` is also the name of estimate.unknowns[{j}]: names must be unique"
+                    ),
+                });
+            }
         }
         Ok(())
     }
