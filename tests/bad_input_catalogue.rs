@@ -852,6 +852,19 @@ fn recording_without_data_rows_is_an_error() {
     assert_error(&r, &["rec.csv:1", "no data rows"]);
 }
 
+/// Found by audit 23: a single training row (`--train-rows 0..1`, `--every` larger
+/// than the recording) was refused as a unit mismatch ("the unit is wrong (mm read
+/// as m?)"): one row has no spread to judge a unit by. Now the row count is named.
+#[test]
+fn recording_with_too_few_training_rows_names_the_count_not_the_unit() {
+    let text = recording(|_, l| Some(l.into()));
+    for extra in [["--train-rows", "0..1"], ["--every", "1000"]] {
+        let r = calibrate("onerow", &text, &extra);
+        assert_error(&r, &["rec.csv", "1 training row(s)", "rows are needed"]);
+        assert!(!r.stderr.contains("unit"), "{extra:?}: {}", r.stderr);
+    }
+}
+
 #[test]
 fn recording_negative_tension_names_line_field_and_value() {
     let text = recording(|i, l| {

@@ -104,6 +104,20 @@ pub fn calibrate<M: CalibrationModel + Clone>(
     if frame.fit_marker_offset {
         frame_free.extend(ns + 6..ns + 9);
     }
+    // each row measures three coordinates: fewer than the values to fit (those
+    // without a prior) cannot determine them (and a single row has no spread for
+    // the unit check below to judge)
+    let unknown = params.iter().filter(|p| p.prior.is_none()).count() + frame_free.len();
+    let needed = unknown.div_ceil(3).max(2);
+    if rows.len() < needed {
+        return bad(format!(
+            "{}: {} training row(s) give {} coordinates for {unknown} values to fit (parameters, capture frame, marker offset): at least {} rows are needed",
+            train.file,
+            rows.len(),
+            3 * rows.len(),
+            needed
+        ));
+    }
     let priors: Vec<(usize, f64, f64)> = params
         .iter()
         .enumerate()
@@ -181,8 +195,12 @@ pub fn calibrate<M: CalibrationModel + Clone>(
         let model_pts: Vec<Vector3<f64>> = keep.iter().map(|&i| model_pts[i]).collect();
         let meas_base: Vec<Vector3<f64>> = keep.iter().map(|&i| meas_base[i]).collect();
         let rms_sigma = rms(&model_pts, &meas_base) / 3f64.sqrt() / settings.capture_noise_m;
-        let ratio = spread(&meas_capture) / spread(&model_pts).max(f64::MIN_POSITIVE);
-        if rms_sigma > settings.unit_check_sigma && !(0.01..=100.0).contains(&ratio) {
+        let (spread_meas, spread_model) = (spread(&meas_capture), spread(&model_pts));
+        let ratio = spread_meas / spread_model.max(f64::MIN_POSITIVE);
+        // a path that does not move (one row, or rows of one pose) says nothing
+        // about the unit: no verdict then
+        let judged = spread_meas > 0.0 && spread_model > 0.0;
+        if judged && rms_sigma > settings.unit_check_sigma && !(0.01..=100.0).contains(&ratio) {
             let worst = model_pts
                 .iter()
                 .zip(&meas_base)
