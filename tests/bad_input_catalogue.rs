@@ -845,6 +845,27 @@ fn recording_row_with_an_extra_cell_names_file_and_line() {
     assert_error(&r, &["rec.csv:6", "8 cells"]);
 }
 
+/// Found by audit 23: the same in a pull recording of `calibrate --identify`: a row
+/// with a 15th cell under a 14-column header was read (exit 0).
+#[test]
+fn pull_recording_row_with_an_extra_cell_names_file_and_line() {
+    let text: String = shipped("data/hardware/ftdcr_v4/tendon_pull.csv")
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == 10 {
+                format!("{l},7\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let dir = TempDir::new("pullextra");
+    let path = dir.file("pull.csv", &text);
+    let r = run(&["calibrate", "--identify", &path]);
+    assert_error(&r, &["pull.csv:10", "15 cells where the header has 14"]);
+}
+
 #[test]
 fn recording_without_data_rows_is_an_error() {
     let text = recording(|i, l| (i == 1).then(|| l.to_string()));

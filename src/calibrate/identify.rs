@@ -259,6 +259,16 @@ impl PullRecording {
         let mut rows = Vec::new();
         for (line, l) in lines {
             let cells = split_csv(l);
+            if cells.len() > names.len() {
+                // a shifted row would be read as if it were right (as in
+                // `Recording`: a short row names its first missing column below)
+                return Err(IdentifyError::BadCell {
+                    file: file.into(),
+                    line,
+                    column: "-".into(),
+                    why: format!("{} cells where the header has {}", cells.len(), names.len()),
+                });
+            }
             let num = |i: usize, scale: f64| -> Result<f64, IdentifyError> {
                 let bad = |why: String| IdentifyError::BadCell {
                     file: file.into(),
