@@ -434,6 +434,24 @@ fn scene_same_unknown_twice_names_both_unknowns() {
     assert_error(&r, &["estimate.unknowns[1].name", "`force_y@s0`", "unique"]);
 }
 
+/// Found by audit 23: a point force of 1e300 N overflowed the residual's round-off
+/// floor to infinity, and the solve reported `Converged` (exit 0) at a residual of
+/// 8.3e300 with the unloaded shape; now `NonFinite`, exit 1.
+#[test]
+fn scene_load_beyond_f64_range_is_not_converged() {
+    let r = solve_scene(
+        "f300",
+        "s.toml",
+        &scene_with(
+            DEMO,
+            "section = 1\nmass_kg = 0.02",
+            "section = 1\nforce_n = [1e300, 0, 0]",
+        ),
+    );
+    assert_eq!(r.code, 1, "stdout {} stderr {}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("status: NonFinite"), "{}", r.stdout);
+}
+
 /// A load the solver cannot reach (a 15 kN cable pull on the 1.56 mm demo rod):
 /// `solve` reports a failure status and exits 1; nothing claims convergence.
 #[test]

@@ -144,8 +144,10 @@ fn check_workspace(ws: &mut Workspace, what: &str) {
     // residual is within the solve's tolerance, unless the branch guard gave a verdict
     // (`Unstable`, or a checked continuation that did not reach full load)
     // (the checked continuation runs above load intensity 3, `CERTIFY_INTENSITY`)
+    // (an infinite floor, loads near the range of f64, certifies nothing: `NonFinite`)
     let verdict = report.status == SolveStatus::Unstable
-        || (ws.settings().branch_guard && ws.load_intensity() > 3.0);
+        || (ws.settings().branch_guard && ws.load_intensity() > 3.0)
+        || (tolerance == f64::INFINITY && report.status == SolveStatus::NonFinite);
     assert!(
         report.status.is_converged() || report.residual > tolerance || verdict,
         "{what}: {report:?} although residual <= tolerance {tolerance}"

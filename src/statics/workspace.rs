@@ -349,6 +349,9 @@ impl Workspace {
 fn status_of(residual: f64, tolerance: f64, stop: SolveStatus) -> SolveStatus {
     match stop {
         SolveStatus::Unstable => stop,
+        // the round-off floor overflowed (loads near the range of f64, e.g. a force
+        // of 1e300 N): every residual would be within it, so none certifies a solution
+        _ if tolerance == f64::INFINITY => SolveStatus::NonFinite,
         _ if residual <= tolerance => SolveStatus::Converged,
         SolveStatus::Converged => SolveStatus::Stalled,
         _ => stop,
