@@ -97,10 +97,13 @@ impl Loads {
             ModelError::non_negative(format!("{f}.mass_kg"), p.mass_kg)?;
         }
         if self.tensions_n.len() > robot.cables().len() {
-            return Err(ModelError::BadIndex {
+            return Err(ModelError::Invalid {
                 field: "loads.tensions_n".into(),
-                index: self.tensions_n.len() - 1,
-                count: robot.cables().len(),
+                why: format!(
+                    "{} values for {} cables (one per [[robot.cables]], in order)",
+                    self.tensions_n.len(),
+                    robot.cables().len()
+                ),
             });
         }
         if let Some(j) = self

@@ -452,6 +452,18 @@ fn scene_load_beyond_f64_range_is_not_converged() {
     assert!(r.stdout.contains("status: NonFinite"), "{}", r.stdout);
 }
 
+/// Found by audit 23: a seventh tension for six cables was reported as
+/// "loads.tensions_n = 6 refers to nothing: only 6 exist".
+#[test]
+fn scene_extra_tension_names_the_counts() {
+    let r = solve_scene(
+        "t7",
+        "s.toml",
+        &scene_with(DEMO, "0.8, 0.0]", "0.8, 0.0, 3.0]"),
+    );
+    assert_error(&r, &["loads.tensions_n", "7 values for 6 cables"]);
+}
+
 /// A load the solver cannot reach (a 15 kN cable pull on the 1.56 mm demo rod):
 /// `solve` reports a failure status and exits 1; nothing claims convergence.
 #[test]
