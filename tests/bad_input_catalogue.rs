@@ -916,6 +916,22 @@ fn recording_with_too_few_training_rows_names_the_count_not_the_unit() {
     }
 }
 
+/// Found by audit 23: `--marker-columns tip_x,tip_y,tip_x` (one column read as two
+/// coordinates) was accepted and fitted (exit 1, `max_iterations`).
+#[test]
+fn recording_marker_column_given_twice_names_both() {
+    let text = recording(|_, l| Some(l.into()));
+    let r = calibrate("dupcols", &text, &["--marker-columns", "tip_x,tip_y,tip_x"]);
+    assert_error(
+        &r,
+        &[
+            "calibration.marker_columns[2]",
+            "`tip_x`",
+            "marker_columns[0]",
+        ],
+    );
+}
+
 #[test]
 fn recording_negative_tension_names_line_field_and_value() {
     let text = recording(|i, l| {

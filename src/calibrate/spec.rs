@@ -221,6 +221,15 @@ impl CalibrationSpec {
                     why: "empty column name".into(),
                 });
             }
+            if let Some(j) = self.marker_columns[..i].iter().position(|d| d == c) {
+                // one column read as two coordinates: the fit would run on nonsense
+                return Err(ModelError::Invalid {
+                    field: format!("calibration.marker_columns[{i}]"),
+                    why: format!(
+                        "`{c}` is also calibration.marker_columns[{j}]: x, y and z need three columns"
+                    ),
+                });
+            }
         }
         for (i, p) in self.params.iter().enumerate() {
             p.validate(&format!("calibration.params[{i}]"))?;
