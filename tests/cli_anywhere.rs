@@ -88,6 +88,49 @@ fn no_argument_commands_work_outside_the_repository() {
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
 }
 
+/// `demo:NAME` wherever a file is expected: the readings of `solve --readings`, and
+/// the scene and recording of `calibrate` (they read paths only before session 23).
+#[test]
+fn demo_files_are_accepted_by_solve_readings_and_calibrate() {
+    let tmp = TempDir::new("demo-args");
+    let o = run(
+        tmp.path(),
+        &[
+            "solve",
+            "demo:scenes/till_tendon_readings.toml",
+            "--readings",
+            "demo:measurements/till_tendon_readings.csv",
+        ],
+    );
+    assert!(o.status.success(), "solve --readings: {}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("6 rows solved, 6 converged, 0 bad rows"),
+        "{}",
+        text(&o.stdout)
+    );
+    // one LM iteration on the first 10 rows of the shipped val recording: the run
+    // reads both demo files and reports both splits (its exit code is the fit's)
+    let o = run(
+        tmp.path(),
+        &[
+            "calibrate",
+            "demo:scenes/ftdcr_v4.toml",
+            "--data",
+            "demo:hardware/ftdcr_v4/val.csv",
+            "--train-rows",
+            "0..10",
+            "--max-iterations",
+            "1",
+        ],
+    );
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("(10 rows)") && out.contains("(433 rows)"),
+        "calibrate: {out}\n{}",
+        text(&o.stderr)
+    );
+}
+
 #[test]
 fn demo_write_copies_the_shipped_files() {
     let tmp = TempDir::new("demo");

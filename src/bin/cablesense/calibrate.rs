@@ -19,11 +19,10 @@ use cablesense::calibrate::{
     CalibrationReport, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup,
     ParamSpec, ReadingsModel, Recording, RowWork, SceneModel, Stage,
 };
-use cablesense::files::demo::DataSource;
+use cablesense::files::demo::{DataRef, DataSource};
 use cablesense::validation::{
     fit, FitMethod, FitProblem, FitSettings, ParamPath, TableData, Target, FITTED_FILE,
 };
-use cablesense::Scene;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -281,13 +280,21 @@ fn param_arg(text: &str) -> anyhow::Result<ParamSpec> {
     Ok(spec)
 }
 
+/// A recording named on the command line: a path, or `demo:NAME` for a shipped one.
+fn load_recording(arg: &std::path::Path, map: &ColumnMap) -> anyhow::Result<Recording> {
+    Ok(match DataRef::parse(arg)? {
+        DataRef::Path(p) => Recording::load(&p, map)?,
+        f @ DataRef::Demo(_) => Recording::parse_str(&f.display(), &f.read()?, map)?,
+    })
+}
+
 fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     let scene_path = a
         .scene
         .clone()
         .context("recording mode needs a SCENE (or use --table for the thesis tables)")?;
     let data = a.data.clone().context("recording mode needs --data FILE")?;
-    let scene = Scene::load(&scene_path)?;
+    let scene = DataRef::parse(&scene_path)?.scene()?;
     let mut spec = scene.calibration.clone().unwrap_or_default();
     if let Some(c) = &a.marker_columns {
         let cols: Vec<String> = c.split(',').map(|x| x.trim().to_string()).collect();
@@ -336,9 +343,9 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
         );
     }
     let map = ColumnMap::from_spec(&spec);
-    let all = Recording::load(&data, &map)?;
+    let all = load_recording(&data, &map)?;
     let (train, val) = match (&a.val, &a.train_rows) {
-        (Some(v), None) => (all, Some(Recording::load(v, &map)?)),
+        (Some(v), None) => (all, Some(load_recording(v, &map)?)),
         (None, Some(r)) => {
             let range = parse_row_range(r).map_err(|e| anyhow::anyhow!(e))?;
             let (t, v) = all.split_rows(range);

@@ -71,10 +71,8 @@ fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Re
             p.display()
         );
     }
-    let open = || -> anyhow::Result<Box<dyn std::io::BufRead>> {
-        let file = crate::stream::open_file(path)?;
-        Ok(Box::new(std::io::BufReader::new(file)))
-    };
+    // a path, or `demo:NAME` for a shipped file (as `track --input`)
+    let open = || crate::stream::open_input(path);
     let output = if a.json { Output::Json } else { Output::Text };
     let rung = match a.model.as_str() {
         "scene" => Rung::Rod(scene.numerics.clone()),
