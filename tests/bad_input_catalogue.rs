@@ -464,6 +464,29 @@ fn scene_extra_tension_names_the_counts() {
     assert_error(&r, &["loads.tensions_n", "7 values for 6 cables"]);
 }
 
+/// A tendon scene whose reference (the robot at its pretensions under the scene's
+/// loads) cannot be solved because of its weight, not its pretension: the error names
+/// the reference solve and every input it depends on, not the pretension alone.
+#[test]
+fn tendon_reference_failure_names_the_reference_not_only_the_pretension() {
+    let dir = TempDir::new("refsolve");
+    let scene = dir.file(
+        "s.toml",
+        &scene_with(TDCR, "density_kg_m3 = 6450.0", "density_kg_m3 = 1e300"),
+    );
+    let readings = repo("data/measurements/tdcr_two_segment_readings.csv");
+    let r = run(&["solve", &scene, "--readings", &readings]);
+    assert_error(
+        &r,
+        &[
+            "tendon reference solve",
+            "did not solve",
+            "the loads",
+            "mass",
+        ],
+    );
+}
+
 /// A load the solver cannot reach (a 15 kN cable pull on the 1.56 mm demo rod):
 /// `solve` reports a failure status and exits 1; nothing claims convergence.
 #[test]

@@ -250,10 +250,12 @@ impl TendonWorkspace {
         self.ws.set_theta(&self.theta);
         let rep = self.ws.solve(Start::Cold);
         if !rep.status.is_converged() {
+            // the reference is the whole scene at q = 0: the pretensions are one of
+            // its inputs, not necessarily the cause (a huge density fails it too)
             return Err(ModelError::Invalid {
-                field: "robot.tendons.pretension_n".into(),
+                field: "tendon reference solve".into(),
                 why: format!(
-                    "the robot at its pretensions (the reference that fixes each tendon's free length) did not solve: {:?}, residual {:.3e}",
+                    "the robot at its pretensions (robot.tendons.pretension_n) under the scene's loads, the reference that fixes each tendon's free length, did not solve: {:?}, residual {:.3e}; check the pretensions, the loads and the rod's stiffness, mass and geometry",
                     rep.status, rep.residual
                 ),
             });
