@@ -73,24 +73,15 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     for (i, line) in file.lines().enumerate() {
         let line = crate::stream::stream_line(line, i + 1)
             .with_context(|| format!("reading {}", a.measure.display()))?;
-        let line = match line {
-            Ok(l) => l,
-            Err(e) => {
-                // not UTF-8: this line is bad, the rows after it are read
-                bad += 1;
-                let why = format!("unreadable line: {e}");
-                if a.json {
-                    println!(
-                        "{}",
-                        serde_json::json!({"line": i + 1, "error": why, "field": "line"})
-                    );
-                } else {
-                    eprintln!("line {}: {why}", i + 1);
-                }
-                continue;
-            }
-        };
-        match p.line(i + 1, &line) {
+        // a line that is not UTF-8 is one bad line, reported like any other
+        let parsed = line.map_err(|e| {
+            cablesense::files::measure::LineError::new(
+                i + 1,
+                "line",
+                format!("unreadable line: {e}"),
+            )
+        });
+        match parsed.and_then(|l| p.line(i + 1, &l)) {
             Ok(None) => {}
             Ok(Some(s)) => {
                 let e = process(&mut est, &s);
