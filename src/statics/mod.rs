@@ -71,8 +71,10 @@ pub struct SolveReport {
     /// Max-norm of the scaled boundary residual at the returned point (-).
     pub residual: f64,
     /// Tolerance the solve used (-): `settings.tolerance`, raised to the round-off
-    /// floor of the residual for this robot, integrator and load when it is below it
-    /// (README `[numerics]`). `Converged` exactly when `residual <= tolerance`.
+    /// floor of the residual for this robot, integrator and load when it is below it,
+    /// and (condensed coupling) to 3 times the settle noise measured between two
+    /// evaluations of the same unknowns (README `[numerics]`, "Tolerance floor").
+    /// `Converged` exactly when `residual <= tolerance`.
     pub tolerance: f64,
     /// ODE right-hand-side evaluations, counting each dual pass once per evaluation.
     pub rhs_evals: u64,

@@ -39,6 +39,8 @@ use predict::Secant;
 mod continuation;
 mod multi;
 mod newton;
+mod noise;
+use noise::SettleNoise;
 mod output;
 mod sens;
 // The solve entry: warm Newton, the cold path, the report.
@@ -89,6 +91,8 @@ pub struct Workspace {
     /// Tolerance of the current solve: `settings.tolerance` raised to the round-off
     /// floor of the residual ([`Workspace::residual_floor`]).
     tol: f64,
+    /// The point `res` belongs to, for measuring the condensed coupling's settle noise.
+    noise: SettleNoise,
     /// The current solve ended in a branch verdict (a failed checked continuation).
     branch_verdict: bool,
     dx: Vec<f64>,
@@ -186,6 +190,7 @@ impl Workspace {
             tip_first: Vector3::zeros(),
             last_intensity: 0.0,
             tol: tolerance,
+            noise: SettleNoise::new(n),
             branch_verdict: false,
             dx: vec![0.0; n],
             res: vec![0.0; n],
@@ -250,6 +255,7 @@ impl Workspace {
     pub fn set_loads(&mut self, loads: &Loads) -> Result<(), ModelError> {
         loads.validate(&self.robot)?;
         if self.plan.same_structure(loads) {
+            self.noise.forget();
             self.plan.set_load_values(loads);
             self.loads.clone_from(loads);
         } else {
@@ -277,6 +283,7 @@ impl Workspace {
             if self.b64.theta[k] != *v {
                 // the last pass (and its settled next holes) belongs to the old value
                 self.last_pass = None;
+                self.noise.forget();
             }
             self.b64.theta[k] = *v;
             self.b3.theta[k] = Dual::constant(*v);

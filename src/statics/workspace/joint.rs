@@ -116,6 +116,7 @@ impl Workspace {
         }
         self.x.copy_from_slice(x);
         self.dxdtheta_valid = false;
+        self.noise.forget();
         let res = if evaluate {
             if self.eval_at(false, 1.0) {
                 max_abs(&self.res)

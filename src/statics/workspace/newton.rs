@@ -85,12 +85,21 @@ impl Workspace {
         match out {
             Ok(y) => {
                 self.tip = y.r;
+                let local = self.b64.local_tol;
+                if !trial && self.plan.condensed {
+                    // a second settled evaluation of the same point: its settle noise
+                    let (x, old, new) = (&self.x, &self.res, &self.b64.res);
+                    self.tol = self.noise.raised(self.tol, x, lam, local, old, new);
+                }
                 self.res.copy_from_slice(&self.b64.res);
+                self.noise
+                    .record(src_of(trial, &self.x, &self.x_trial), lam, local);
                 true
             }
             Err(_) => {
                 // no residual at `x`: never leave an older one to decide a status
                 self.res.fill(f64::INFINITY);
+                self.noise.forget();
                 false
             }
         }
@@ -209,6 +218,7 @@ impl Workspace {
                     }
                     std::mem::swap(&mut self.x, &mut self.x_trial);
                     self.res.copy_from_slice(&self.b64.res);
+                    self.noise.record(&self.x, lam, self.b64.local_tol);
                     self.note_first_step();
                 } else {
                     self.lu_valid = false;
@@ -234,6 +244,7 @@ impl Workspace {
             }
             std::mem::swap(&mut self.x, &mut self.x_trial);
             self.res.copy_from_slice(&self.b64.res);
+            self.noise.record(&self.x, lam, self.b64.local_tol);
             self.note_first_step();
             if alpha < 1.0 {
                 // far from the solution: the Jacobian changes quickly, do not reuse it
@@ -263,5 +274,14 @@ impl Workspace {
             self.x_first.copy_from_slice(&self.x);
             self.tip_first = self.tip;
         }
+    }
+}
+
+/// The unknowns an evaluation read: the trial point or the current one.
+fn src_of<'a>(trial: bool, x: &'a [f64], x_trial: &'a [f64]) -> &'a [f64] {
+    if trial {
+        x_trial
+    } else {
+        x
     }
 }

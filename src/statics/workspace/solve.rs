@@ -46,6 +46,7 @@ impl Workspace {
         // check on the Newton path sees: such a step is solved as a checked cold solve
         let intensity = self.load_intensity();
         self.tol = self.settings.tolerance.max(self.residual_floor());
+        self.noise.forget();
         self.branch_verdict = false;
         if let Some(rep) = self.multi_first(start, intensity) {
             return rep;
