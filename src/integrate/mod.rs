@@ -39,7 +39,7 @@ impl<T: Real> State<T> {
     pub fn axpy(&mut self, k: &State<T>, h: f64) {
         let axpy = |o: &mut [T], k: &[T]| {
             for (oi, ki) in o.iter_mut().zip(k) {
-                *oi += ki.scale(h);
+                *oi = ki.scale_add(h, *oi);
             }
         };
         axpy(self.r.as_mut_slice(), k.r.as_slice());
@@ -53,7 +53,7 @@ impl<T: Real> State<T> {
     pub fn set_add_scaled(&mut self, y: &State<T>, k: &State<T>, h: f64) {
         let set = |o: &mut [T], y: &[T], k: &[T]| {
             for ((oi, yi), ki) in o.iter_mut().zip(y).zip(k) {
-                *oi = *yi + ki.scale(h);
+                *oi = ki.scale_add(h, *yi);
             }
         };
         set(self.r.as_mut_slice(), y.r.as_slice(), k.r.as_slice());

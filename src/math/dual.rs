@@ -3,7 +3,7 @@
 //! Evaluating the shooting residual over `Dual<N>` gives the residual and `N` exact
 //! columns of its Jacobian in one pass (no finite differences).
 
-use super::Real;
+use super::{fma, Real};
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// A dual number with `N` derivative directions.
@@ -87,7 +87,7 @@ impl<const N: usize> Mul for Dual<N> {
     fn mul(self, o: Self) -> Self {
         let mut d = [0.0; N];
         for (i, di) in d.iter_mut().enumerate() {
-            *di = self.d[i] * o.v + self.v * o.d[i];
+            *di = fma(self.d[i], o.v, self.v * o.d[i]);
         }
         Self { v: self.v * o.v, d }
     }
@@ -106,7 +106,7 @@ impl<const N: usize> Div for Dual<N> {
         let v = self.v * inv;
         let mut d = [0.0; N];
         for (i, di) in d.iter_mut().enumerate() {
-            *di = (self.d[i] - v * o.d[i]) * inv;
+            *di = fma(-v, o.d[i], self.d[i]) * inv;
         }
         Self { v, d }
     }
@@ -176,6 +176,30 @@ impl<const N: usize> Real for Dual<N> {
         }
         (Self { v: s, d: ds }, Self { v: c, d: dc })
     }
+    #[inline(always)]
+    fn mul_add_r(self, a: Self, b: Self) -> Self {
+        // (s a + b)' = s' a + s a' + b': two fused operations per direction
+        let mut d = [0.0; N];
+        for (i, di) in d.iter_mut().enumerate() {
+            *di = fma(self.d[i], a.v, fma(self.v, a.d[i], b.d[i]));
+        }
+        // the value as an `f64` pass computes it (`Real for f64`): fused too
+        Self {
+            v: fma(self.v, a.v, b.v),
+            d,
+        }
+    }
+    #[inline(always)]
+    fn scale_add(self, k: f64, b: Self) -> Self {
+        let mut d = [0.0; N];
+        for (i, di) in d.iter_mut().enumerate() {
+            *di = fma(self.d[i], k, b.d[i]);
+        }
+        Self {
+            v: fma(self.v, k, b.v),
+            d,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -193,6 +217,34 @@ mod tests {
         // df/dx = (y + 1/y) / (2f), df/dy = (x - x/y^2) / (2f)
         assert!((f.d[0] - 2.5 / (2.0 * v)).abs() < 1e-15);
         assert!((f.d[1] - 2.25 / (2.0 * v)).abs() < 1e-15);
+    }
+
+    /// The fused forms against the product and sum they fuse (1e-15, one rounding
+    /// fewer), and the value part of a dual exactly as the `f64` form computes it.
+    #[test]
+    fn fused_multiply_add_rules() {
+        let x = Dual::<2>::variable(1.5, 0);
+        let y = Dual::<2>::variable(-0.75, 1);
+        let z = Dual::<2>::constant(0.3) + x.scale(2.0);
+        let (f, g) = (x.mul_add_r(y, z), x * y + z);
+        assert!((f.v - g.v).abs() < 1e-15);
+        // d/dx (x y + 0.3 + 2x) = y + 2, d/dy = x
+        assert!((f.d[0] - 1.25).abs() < 1e-15 && (f.d[1] - 1.5).abs() < 1e-15);
+        assert!((g.d[0] - 1.25).abs() < 1e-15 && (g.d[1] - 1.5).abs() < 1e-15);
+        let h = y.scale_add(4.0, x);
+        assert!((h.v - (-1.5)).abs() < 1e-15 && h.d == [1.0, 4.0]);
+        // a dual's value part is the f64 form's, bit for bit (the passes agree)
+        assert_eq!(f.v, 1.5f64.mul_add_r(-0.75, z.v));
+        assert_eq!(h.v, (-0.75f64).scale_add(4.0, 1.5));
+        assert_eq!(
+            1.5f64.mul_add_r(-0.75, 0.3),
+            crate::math::fma(1.5, -0.75, 0.3)
+        );
+        // where the target fuses, one rounding: 0.1 * 10 - 1 is 0 unfused, the
+        // product's rounding error (5.55e-17) fused
+        let fused = cfg!(any(target_feature = "fma", target_arch = "aarch64"));
+        let r = 0.1f64.mul_add_r(10.0, -1.0);
+        assert_eq!(r != 0.0, fused, "{r:e}");
     }
 
     #[test]
