@@ -1156,3 +1156,20 @@ fn cli_param_bound_not_a_number_names_the_value() {
     );
     assert_error(&r, &["`abc` is not a number"]);
 }
+
+// ---------------------------------------------------------------------------------
+// Audit 24
+// ---------------------------------------------------------------------------------
+
+/// Found by audit 24: a value of 1e300 in an error message printed as 301 digits;
+/// extreme magnitudes now print in scientific form.
+#[test]
+fn scene_extreme_value_prints_in_scientific_form() {
+    let r = solve_scene(
+        "len300",
+        "s.toml",
+        &scene_with(TDCR, "length_m = 0.1", "length_m = -1e300"),
+    );
+    assert_error(&r, &["robot.sections[0].length_m", "got -1e300"]);
+    assert!(!r.stderr.contains("0000000000"), "{}", r.stderr);
+}

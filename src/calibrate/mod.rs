@@ -105,8 +105,9 @@ pub enum CalibrationError {
     /// the residual is far above the capture noise: the columns' unit is wrong.
     #[error(
         "{file}:{line}: columns `{columns}` read as {unit}: the measured path spreads {spread_ratio:.3e} times the model's \
-         and the best rigid fit leaves {rms_sigma:.3e} capture-noise sigmas ({noise_m} m) RMS; \
-         the unit is wrong (mm read as m?) (line: the worst row)"
+         and the best rigid fit leaves {rms_sigma:.3e} capture-noise sigmas ({} m) RMS; \
+         the unit is wrong (mm read as m?) (line: the worst row)",
+        crate::error::Num(*.noise_m)
     )]
     UnitMismatch {
         /// File.
