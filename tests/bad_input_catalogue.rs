@@ -1173,3 +1173,14 @@ fn scene_extreme_value_prints_in_scientific_form() {
     assert_error(&r, &["robot.sections[0].length_m", "got -1e300"]);
     assert!(!r.stderr.contains("0000000000"), "{}", r.stderr);
 }
+
+/// Found by audit 24: `pareto --reps 0` ran (0 was raised to 1 in silence); the
+/// median of no timed repetition is undefined, so 0 is refused before any solve.
+#[test]
+fn cli_pareto_zero_reps_names_the_option_and_value() {
+    let dir = TempDir::new("reps0");
+    let out = dir.0.join("out").display().to_string();
+    let r = run(&["pareto", TDCR, "--reps", "0", "--out", &out, "--quiet"]);
+    assert_error(&r, &["--reps", "'0'", "at least 1"]);
+    assert!(!dir.0.join("out").exists(), "nothing is measured");
+}
