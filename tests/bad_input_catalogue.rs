@@ -1184,3 +1184,22 @@ fn cli_pareto_zero_reps_names_the_option_and_value() {
     assert_error(&r, &["--reps", "'0'", "at least 1"]);
     assert!(!dir.0.join("out").exists(), "nothing is measured");
 }
+
+/// Found by audit 24: `huber_sigma = 1e-300` was accepted and the fit reported
+/// "Converged after 0 iterations"; a threshold below 1e-3 noise sigmas (and so
+/// every subnormal one) is refused naming field and value.
+#[test]
+fn calibration_degenerate_huber_threshold_names_field_and_value() {
+    let text = recording(|_, l| Some(l.into()));
+    for (k, shown) in [
+        ("1e-300", "1e-300"),
+        ("5e-324", "5e-324"),
+        ("0.0005", "0.0005"),
+    ] {
+        let r = calibrate("huber", &text, &["--huber", k]);
+        assert_error(
+            &r,
+            &["calibration.huber_sigma", shown, "below 0.001 noise sigmas"],
+        );
+    }
+}

@@ -62,7 +62,7 @@ pub use recording::{
 };
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
 pub use run::{calibrate, frame_param_names, CalibrationSetup};
-pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec};
+pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec, MIN_HUBER_SIGMA};
 pub use stats::{
     parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,
     CORRELATION_LIMIT, NULL_DIRECTION_LIMIT,
