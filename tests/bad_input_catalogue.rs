@@ -1203,3 +1203,26 @@ fn calibration_degenerate_huber_threshold_names_field_and_value() {
         );
     }
 }
+
+/// Found by audit 24: `[readings] time_offset_s = 1e300` clamped every row to its
+/// block's first reading (the tip frozen, exit 0); an offset beyond 10 s is refused.
+#[test]
+fn scene_time_offset_beyond_its_bound_names_field_and_value() {
+    let dir = TempDir::new("toff");
+    let rows = dir.file("r.csv", &format!("{RD_HEADER}0,0,0,0,0,0,0\n"));
+    for (offset, shown) in [("1e300", "1e300"), ("-53.0", "-53")] {
+        let scene = dir.file(
+            "s.toml",
+            &scene_with(
+                TDCR,
+                "[readings]\nscale_m = 1.0",
+                &format!("[readings]\nscale_m = 1.0\ntime_offset_s = {offset}"),
+            ),
+        );
+        let r = run(&["solve", &scene, "--readings", &rows]);
+        assert_error(
+            &r,
+            &["s.toml", "readings.time_offset_s", shown, "at most 10 s"],
+        );
+    }
+}
