@@ -1226,3 +1226,55 @@ fn scene_time_offset_beyond_its_bound_names_field_and_value() {
         );
     }
 }
+
+/// Found by audit 24: a JSON row with a key given twice took the last value in
+/// silence. The row is refused naming the key (the stream goes on); a derived
+/// struct (encoder rows, scene files) already refuses a repeated field; a JSON
+/// recording stops `calibrate` naming file, line and key.
+#[test]
+fn json_row_with_a_repeated_key_is_refused_naming_the_key() {
+    let (_, rows) = readings_rows(
+        "{\"t_s\": 0, \"s1a\": 0.001, \"s1b\": 0, \"s1c\": 0, \"s2a\": 0, \"s2b\": 0, \"s2c\": 0, \"s1a\": 0.002}\n\
+         {\"t_s\": 0.1, \"s1a\": 0.001, \"s1b\": 0, \"s1c\": 0, \"s2a\": 0, \"s2b\": 0, \"s2c\": 0}\n",
+    );
+    assert_row_error(&rows, 1, "json", &["duplicate key `s1a`", "column"]);
+    assert_good_row(&rows, 2);
+
+    let (r, rows) = track_rows(
+        "{\"t_s\": 0, \"changes_m\": [0, 0, 0], \"changes_m\": [1, 1, 1]}\n\
+         {\"t_s\": 0.1, \"changes_m\": [1.67e-3, -2.45e-3, 2.5e-4]}\n",
+    );
+    assert_eq!(r.code, 0);
+    assert_row_error(&rows, 1, "json", &["duplicate field `changes_m`"]);
+    assert_good_row(&rows, 2);
+
+    let r = solve_scene(
+        "jsondup",
+        "s.json",
+        "{\"robot\": {\"sections\": [{\"length_m\": 0.1, \"length_m\": 0.2}]}}",
+    );
+    assert_error(&r, &["s.json", "duplicate field `length_m`", "line 1"]);
+
+    let csv = recording(|_, l| Some(l.into()));
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let json: String = lines
+        .enumerate()
+        .map(|(i, l)| {
+            let mut cells: Vec<String> = header
+                .iter()
+                .zip(l.split(','))
+                .map(|(h, v)| format!("\"{h}\": {v}"))
+                .collect();
+            if i == 2 {
+                cells.push(format!("\"{}\": 1.0", header[1]));
+            }
+            format!("{{{}}}\n", cells.join(", "))
+        })
+        .collect();
+    let r = calibrate("jsonrec", &json, &[]);
+    assert_error(
+        &r,
+        &["rec.csv:3", &format!("duplicate key `{}`", header[1])],
+    );
+}

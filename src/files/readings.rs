@@ -345,9 +345,12 @@ impl ReadingsParser {
     fn json_row(&mut self, line: usize, t: &str) -> Result<ReadingRow, LineError> {
         let v: serde_json::Value =
             serde_json::from_str(t).map_err(|e| Self::err(line, "json", e.to_string()))?;
-        let obj = v
-            .as_object()
-            .ok_or_else(|| Self::err(line, "json", "a row must be an object"))?;
+        if !v.is_object() {
+            return Err(Self::err(line, "json", "a row must be an object"));
+        }
+        // `Value` keeps the last of two equal keys: parse again refusing a repeat
+        let obj = &crate::files::json::unique_object(t)
+            .map_err(|e| Self::err(line, "json", e.to_string()))?;
         if let Some(name) = self.unknown_measurement_column(obj.keys().map(String::as_str)) {
             return Err(self.unknown_measurement(line, &name));
         }
