@@ -1278,3 +1278,66 @@ fn json_row_with_a_repeated_key_is_refused_naming_the_key() {
         &["rec.csv:3", &format!("duplicate key `{}`", header[1])],
     );
 }
+
+/// Found by audit 24: an empty rows file (`solve --readings`, `track --input`,
+/// `estimate --measure`) exited 0 with nothing solved. A named file with no row
+/// (empty, or a header alone) is fatal like a bad stream header: exit 1, the file
+/// named. Standard input that closes before its first row is not an error (a
+/// control loop whose producer stopped), and `calibrate --data` stops (exit 2).
+#[test]
+fn rows_file_without_rows_is_an_error_naming_it() {
+    let dir = TempDir::new("norows");
+    let empty = dir.file("empty.csv", "");
+    let blank = dir.file("blank.csv", "\n  \n");
+    let header = dir.file("header.csv", RD_HEADER);
+    let enc_header = dir.file("enc_header.csv", ENC_HEADER);
+    let load_cells = repo("data/load_cells/tdcr_load_cells.toml");
+    let cases: [(&[&str], &str, &str); 6] = [
+        (
+            &["solve", TDCR, "--readings", &empty],
+            "empty.csv",
+            "the file is empty",
+        ),
+        (
+            &["solve", TDCR, "--readings", &header],
+            "header.csv",
+            "a header",
+        ),
+        (
+            &["track", TDCR, "--input", &blank],
+            "blank.csv",
+            "the file is empty",
+        ),
+        (
+            &["track", TRACK, "--input", &enc_header],
+            "enc_header.csv",
+            "a header",
+        ),
+        (
+            &["estimate", TRACK, "--measure", &empty],
+            "empty.csv",
+            "the file is empty",
+        ),
+        (
+            &["estimate", &load_cells, "--measure", &header],
+            "header.csv",
+            "a header",
+        ),
+    ];
+    for (args, file, why) in cases {
+        let r = run(args);
+        assert_eq!(r.code, 1, "{args:?}: {} {}", r.stdout, r.stderr);
+        assert!(r.stderr.starts_with("error: "), "{args:?}: {}", r.stderr);
+        for p in [file, "no rows", why] {
+            assert!(r.stderr.contains(p), "{args:?}: `{p}` not in {}", r.stderr);
+        }
+    }
+    // standard input: a header and no row, or nothing, is a stream that ended
+    for stdin in ["", RD_HEADER] {
+        let r = run_with(&["track", &repo(TDCR)], Some(stdin));
+        assert_eq!(r.code, 0, "{stdin:?}: {}", r.stderr);
+        assert!(r.stdout.is_empty() && r.stderr.is_empty(), "{}", r.stderr);
+    }
+    let r = calibrate("empty", "", &[]);
+    assert_error(&r, &["rec.csv", "no header and no rows"]);
+}
