@@ -466,13 +466,15 @@ fn scene_extra_tension_names_the_counts() {
 
 /// A tendon scene whose reference (the robot at its pretensions under the scene's
 /// loads) cannot be solved because of its weight, not its pretension: the error names
-/// the reference solve and every input it depends on, not the pretension alone.
+/// the reference solve and every input it depends on, not the pretension alone. (A
+/// density of 1e8 kg/m^3: 154 N of rod, heavy but below its axial stiffness EA, 47 kN,
+/// which `scene_weight_beyond_the_axial_stiffness_names_the_density` refuses.)
 #[test]
 fn tendon_reference_failure_names_the_reference_not_only_the_pretension() {
     let dir = TempDir::new("refsolve");
     let scene = dir.file(
         "s.toml",
-        &scene_with(TDCR, "density_kg_m3 = 6450.0", "density_kg_m3 = 1e300"),
+        &scene_with(TDCR, "density_kg_m3 = 6450.0", "density_kg_m3 = 1e8"),
     );
     let readings = repo("data/measurements/tdcr_two_segment_readings.csv");
     let r = run(&["solve", &scene, "--readings", &readings]);
@@ -1340,4 +1342,25 @@ fn rows_file_without_rows_is_an_error_naming_it() {
     }
     let r = calibrate("empty", "", &[]);
     assert_error(&r, &["rec.csv", "no header and no rows"]);
+}
+
+/// Found by audit 24: a section density of 1e300 solved to `Converged` with the rod
+/// pressed past an axial strain of -1 (inverted). A weight that reaches a section's
+/// axial stiffness EA is refused, naming the heaviest contribution.
+#[test]
+fn scene_weight_beyond_the_axial_stiffness_names_the_density() {
+    let r = solve_scene(
+        "rho300",
+        "s.toml",
+        &scene_with(TDCR, "density_kg_m3 = 6450.0", "density_kg_m3 = 1e300"),
+    );
+    assert_error(
+        &r,
+        &[
+            "robot.sections[0].density_kg_m3 = 1e300",
+            "axial stiffness EA",
+            "section 0",
+        ],
+    );
+    assert!(!r.stdout.contains("Converged"), "{}", r.stdout);
 }
