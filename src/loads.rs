@@ -113,6 +113,83 @@ impl Loads {
         {
             ModelError::non_negative(format!("loads.tensions_n[{j}]"), self.tensions_n[j])?;
         }
+        self.check_weight(robot)
+    }
+
+    /// The weight each section carries (rod, guide disks and point masses from its
+    /// base to the tip, times |g|) must stay below the section's axial stiffness
+    /// `EA`: a weight of `EA` along the axis is an axial strain of -1 (a rod pressed
+    /// to zero length, beyond it inverted), which no Cosserat equilibrium of a real
+    /// rod has, yet the shooting solve can still meet its boundary conditions there
+    /// and report `Converged`. The error names the heaviest contribution (a section's
+    /// `density_kg_m3`, a section's `guides.mass_kg` or a `loads.point[i].mass_kg`).
+    /// Allocation-free when it passes.
+    fn check_weight(&self, robot: &Robot) -> Result<(), ModelError> {
+        let [gx, gy, gz] = self.gravity_m_s2;
+        let g = (gx * gx + gy * gy + gz * gz).sqrt();
+        if g == 0.0 {
+            return Ok(());
+        }
+        let sections = robot.sections();
+        let guide_mass = |k: usize| -> f64 {
+            robot.guides()[sections[k].guides.clone()]
+                .iter()
+                .map(|d| d.mass)
+                .sum()
+        };
+        let point_mass = |k: usize| -> f64 {
+            self.point
+                .iter()
+                .filter(|p| p.section == k)
+                .map(|p| p.mass_kg)
+                .sum()
+        };
+        let rod_mass = |k: usize| sections[k].stiffness.linear_density * sections[k].length;
+        let mut distal = 0.0;
+        for i in (0..sections.len()).rev() {
+            distal += rod_mass(i) + guide_mass(i) + point_mass(i);
+            let (weight, ea) = (g * distal, sections[i].stiffness.shear_stretch.z);
+            if weight < ea {
+                continue;
+            }
+            // the heaviest single contribution from section i to the tip
+            let mut field = String::new();
+            let (mut value, mut heaviest) = (0.0, -1.0);
+            for k in i..sections.len() {
+                if rod_mass(k) > heaviest {
+                    heaviest = rod_mass(k);
+                    field = format!("robot.sections[{k}].density_kg_m3");
+                    value = robot.spec().sections[k].material.density_kg_m3;
+                }
+                if guide_mass(k) > heaviest {
+                    heaviest = guide_mass(k);
+                    field = format!("robot.sections[{k}].guides.mass_kg");
+                    value = robot.spec().sections[k]
+                        .guides
+                        .as_ref()
+                        .map_or(0.0, |d| d.mass_kg);
+                }
+                for (p, load) in self.point.iter().enumerate() {
+                    if load.section == k && load.mass_kg > heaviest {
+                        heaviest = load.mass_kg;
+                        field = format!("loads.point[{p}].mass_kg");
+                        value = load.mass_kg;
+                    }
+                }
+            }
+            return Err(ModelError::OutOfRange {
+                field,
+                value,
+                why: format!(
+                    "the weight section {i} carries from its base to the tip ({} N at |g| = {} m/s^2) \
+                     reaches its axial stiffness EA = {} N: an axial strain of -1 or beyond (the rod \
+                     pressed to zero length or inverted), not a physical state",
+                    crate::error::Num(weight),
+                    crate::error::Num(g),
+                    crate::error::Num(ea)
+                ),
+            });
+        }
         Ok(())
     }
 }

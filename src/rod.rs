@@ -73,7 +73,10 @@ impl CrossSection {
                     return Err(ModelError::OutOfRange {
                         field: format!("{field}.tube.inner_diameter_m"),
                         value: inner_diameter_m,
-                        why: format!("must be < outer_diameter_m = {outer_diameter_m}"),
+                        why: format!(
+                            "must be < outer_diameter_m = {}",
+                            crate::error::Num(outer_diameter_m)
+                        ),
                     });
                 }
             }

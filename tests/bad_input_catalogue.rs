@@ -466,13 +466,15 @@ fn scene_extra_tension_names_the_counts() {
 
 /// A tendon scene whose reference (the robot at its pretensions under the scene's
 /// loads) cannot be solved because of its weight, not its pretension: the error names
-/// the reference solve and every input it depends on, not the pretension alone.
+/// the reference solve and every input it depends on, not the pretension alone. (A
+/// density of 1e8 kg/m^3: 154 N of rod, heavy but below its axial stiffness EA, 47 kN,
+/// which `scene_weight_beyond_the_axial_stiffness_names_the_density` refuses.)
 #[test]
 fn tendon_reference_failure_names_the_reference_not_only_the_pretension() {
     let dir = TempDir::new("refsolve");
     let scene = dir.file(
         "s.toml",
-        &scene_with(TDCR, "density_kg_m3 = 6450.0", "density_kg_m3 = 1e300"),
+        &scene_with(TDCR, "density_kg_m3 = 6450.0", "density_kg_m3 = 1e8"),
     );
     let readings = repo("data/measurements/tdcr_two_segment_readings.csv");
     let r = run(&["solve", &scene, "--readings", &readings]);
@@ -1155,4 +1157,210 @@ fn cli_param_bound_not_a_number_names_the_value() {
         &["--param", "robot/sections/0/youngs_modulus_pa:abc:1"],
     );
     assert_error(&r, &["`abc` is not a number"]);
+}
+
+// ---------------------------------------------------------------------------------
+// Audit 24
+// ---------------------------------------------------------------------------------
+
+/// Found by audit 24: a value of 1e300 in an error message printed as 301 digits;
+/// extreme magnitudes now print in scientific form.
+#[test]
+fn scene_extreme_value_prints_in_scientific_form() {
+    let r = solve_scene(
+        "len300",
+        "s.toml",
+        &scene_with(TDCR, "length_m = 0.1", "length_m = -1e300"),
+    );
+    assert_error(&r, &["robot.sections[0].length_m", "got -1e300"]);
+    assert!(!r.stderr.contains("0000000000"), "{}", r.stderr);
+}
+
+/// Found by audit 24: `pareto --reps 0` ran (0 was raised to 1 in silence); the
+/// median of no timed repetition is undefined, so 0 is refused before any solve.
+#[test]
+fn cli_pareto_zero_reps_names_the_option_and_value() {
+    let dir = TempDir::new("reps0");
+    let out = dir.0.join("out").display().to_string();
+    let r = run(&["pareto", TDCR, "--reps", "0", "--out", &out, "--quiet"]);
+    assert_error(&r, &["--reps", "'0'", "at least 1"]);
+    assert!(!dir.0.join("out").exists(), "nothing is measured");
+}
+
+/// Found by audit 24: `huber_sigma = 1e-300` was accepted and the fit reported
+/// "Converged after 0 iterations"; a threshold below 1e-3 noise sigmas (and so
+/// every subnormal one) is refused naming field and value.
+#[test]
+fn calibration_degenerate_huber_threshold_names_field_and_value() {
+    let text = recording(|_, l| Some(l.into()));
+    for (k, shown) in [
+        ("1e-300", "1e-300"),
+        ("5e-324", "5e-324"),
+        ("0.0005", "0.0005"),
+    ] {
+        let r = calibrate("huber", &text, &["--huber", k]);
+        assert_error(
+            &r,
+            &["calibration.huber_sigma", shown, "below 0.001 noise sigmas"],
+        );
+    }
+}
+
+/// Found by audit 24: `[readings] time_offset_s = 1e300` clamped every row to its
+/// block's first reading (the tip frozen, exit 0); an offset beyond 10 s is refused.
+#[test]
+fn scene_time_offset_beyond_its_bound_names_field_and_value() {
+    let dir = TempDir::new("toff");
+    let rows = dir.file("r.csv", &format!("{RD_HEADER}0,0,0,0,0,0,0\n"));
+    for (offset, shown) in [("1e300", "1e300"), ("-53.0", "-53")] {
+        let scene = dir.file(
+            "s.toml",
+            &scene_with(
+                TDCR,
+                "[readings]\nscale_m = 1.0",
+                &format!("[readings]\nscale_m = 1.0\ntime_offset_s = {offset}"),
+            ),
+        );
+        let r = run(&["solve", &scene, "--readings", &rows]);
+        assert_error(
+            &r,
+            &["s.toml", "readings.time_offset_s", shown, "at most 10 s"],
+        );
+    }
+}
+
+/// Found by audit 24: a JSON row with a key given twice took the last value in
+/// silence. The row is refused naming the key (the stream goes on); a derived
+/// struct (encoder rows, scene files) already refuses a repeated field; a JSON
+/// recording stops `calibrate` naming file, line and key.
+#[test]
+fn json_row_with_a_repeated_key_is_refused_naming_the_key() {
+    let (_, rows) = readings_rows(
+        "{\"t_s\": 0, \"s1a\": 0.001, \"s1b\": 0, \"s1c\": 0, \"s2a\": 0, \"s2b\": 0, \"s2c\": 0, \"s1a\": 0.002}\n\
+         {\"t_s\": 0.1, \"s1a\": 0.001, \"s1b\": 0, \"s1c\": 0, \"s2a\": 0, \"s2b\": 0, \"s2c\": 0}\n",
+    );
+    assert_row_error(&rows, 1, "json", &["duplicate key `s1a`", "column"]);
+    assert_good_row(&rows, 2);
+
+    let (r, rows) = track_rows(
+        "{\"t_s\": 0, \"changes_m\": [0, 0, 0], \"changes_m\": [1, 1, 1]}\n\
+         {\"t_s\": 0.1, \"changes_m\": [1.67e-3, -2.45e-3, 2.5e-4]}\n",
+    );
+    assert_eq!(r.code, 0);
+    assert_row_error(&rows, 1, "json", &["duplicate field `changes_m`"]);
+    assert_good_row(&rows, 2);
+
+    let r = solve_scene(
+        "jsondup",
+        "s.json",
+        "{\"robot\": {\"sections\": [{\"length_m\": 0.1, \"length_m\": 0.2}]}}",
+    );
+    assert_error(&r, &["s.json", "duplicate field `length_m`", "line 1"]);
+
+    let csv = recording(|_, l| Some(l.into()));
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let json: String = lines
+        .enumerate()
+        .map(|(i, l)| {
+            let mut cells: Vec<String> = header
+                .iter()
+                .zip(l.split(','))
+                .map(|(h, v)| format!("\"{h}\": {v}"))
+                .collect();
+            if i == 2 {
+                cells.push(format!("\"{}\": 1.0", header[1]));
+            }
+            format!("{{{}}}\n", cells.join(", "))
+        })
+        .collect();
+    let r = calibrate("jsonrec", &json, &[]);
+    assert_error(
+        &r,
+        &["rec.csv:3", &format!("duplicate key `{}`", header[1])],
+    );
+}
+
+/// Found by audit 24: an empty rows file (`solve --readings`, `track --input`,
+/// `estimate --measure`) exited 0 with nothing solved. A named file with no row
+/// (empty, or a header alone) is fatal like a bad stream header: exit 1, the file
+/// named. Standard input that closes before its first row is not an error (a
+/// control loop whose producer stopped), and `calibrate --data` stops (exit 2).
+#[test]
+fn rows_file_without_rows_is_an_error_naming_it() {
+    let dir = TempDir::new("norows");
+    let empty = dir.file("empty.csv", "");
+    let blank = dir.file("blank.csv", "\n  \n");
+    let header = dir.file("header.csv", RD_HEADER);
+    let enc_header = dir.file("enc_header.csv", ENC_HEADER);
+    let load_cells = repo("data/load_cells/tdcr_load_cells.toml");
+    let cases: [(&[&str], &str, &str); 6] = [
+        (
+            &["solve", TDCR, "--readings", &empty],
+            "empty.csv",
+            "the file is empty",
+        ),
+        (
+            &["solve", TDCR, "--readings", &header],
+            "header.csv",
+            "a header",
+        ),
+        (
+            &["track", TDCR, "--input", &blank],
+            "blank.csv",
+            "the file is empty",
+        ),
+        (
+            &["track", TRACK, "--input", &enc_header],
+            "enc_header.csv",
+            "a header",
+        ),
+        (
+            &["estimate", TRACK, "--measure", &empty],
+            "empty.csv",
+            "the file is empty",
+        ),
+        (
+            &["estimate", &load_cells, "--measure", &header],
+            "header.csv",
+            "a header",
+        ),
+    ];
+    for (args, file, why) in cases {
+        let r = run(args);
+        assert_eq!(r.code, 1, "{args:?}: {} {}", r.stdout, r.stderr);
+        assert!(r.stderr.starts_with("error: "), "{args:?}: {}", r.stderr);
+        for p in [file, "no rows", why] {
+            assert!(r.stderr.contains(p), "{args:?}: `{p}` not in {}", r.stderr);
+        }
+    }
+    // standard input: a header and no row, or nothing, is a stream that ended
+    for stdin in ["", RD_HEADER] {
+        let r = run_with(&["track", &repo(TDCR)], Some(stdin));
+        assert_eq!(r.code, 0, "{stdin:?}: {}", r.stderr);
+        assert!(r.stdout.is_empty() && r.stderr.is_empty(), "{}", r.stderr);
+    }
+    let r = calibrate("empty", "", &[]);
+    assert_error(&r, &["rec.csv", "no header and no rows"]);
+}
+
+/// Found by audit 24: a section density of 1e300 solved to `Converged` with the rod
+/// pressed past an axial strain of -1 (inverted). A weight that reaches a section's
+/// axial stiffness EA is refused, naming the heaviest contribution.
+#[test]
+fn scene_weight_beyond_the_axial_stiffness_names_the_density() {
+    let r = solve_scene(
+        "rho300",
+        "s.toml",
+        &scene_with(TDCR, "density_kg_m3 = 6450.0", "density_kg_m3 = 1e300"),
+    );
+    assert_error(
+        &r,
+        &[
+            "robot.sections[0].density_kg_m3 = 1e300",
+            "axial stiffness EA",
+            "section 0",
+        ],
+    );
+    assert!(!r.stdout.contains("Converged"), "{}", r.stdout);
 }

@@ -62,7 +62,7 @@ pub use recording::{
 };
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
 pub use run::{calibrate, frame_param_names, CalibrationSetup};
-pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec};
+pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec, MIN_HUBER_SIGMA};
 pub use stats::{
     parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,
     CORRELATION_LIMIT, NULL_DIRECTION_LIMIT,
@@ -105,8 +105,9 @@ pub enum CalibrationError {
     /// the residual is far above the capture noise: the columns' unit is wrong.
     #[error(
         "{file}:{line}: columns `{columns}` read as {unit}: the measured path spreads {spread_ratio:.3e} times the model's \
-         and the best rigid fit leaves {rms_sigma:.3e} capture-noise sigmas ({noise_m} m) RMS; \
-         the unit is wrong (mm read as m?) (line: the worst row)"
+         and the best rigid fit leaves {rms_sigma:.3e} capture-noise sigmas ({} m) RMS; \
+         the unit is wrong (mm read as m?) (line: the worst row)",
+        crate::error::Num(*.noise_m)
     )]
     UnitMismatch {
         /// File.

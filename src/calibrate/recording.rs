@@ -269,7 +269,8 @@ impl Recording {
         for (line, l) in lines {
             let is_json = *json.get_or_insert_with(|| l.trim_start().starts_with('{'));
             if is_json {
-                let obj: serde_json::Map<String, serde_json::Value> = serde_json::from_str(l)
+                // (a key given twice is refused, not read as its last value)
+                let obj = crate::files::json::unique_object(l)
                     .map_err(|e| cell_err(file, line, "-".into(), format!("bad JSON: {e}")))?;
                 let lay = match &layout {
                     Some(l) => l,

@@ -72,6 +72,10 @@ pub fn calibrate<M: CalibrationModel + Clone>(
             settings.capture_noise_m
         ));
     }
+    if let Some(k) = settings.huber_sigma {
+        super::spec::check_huber_sigma("huber_sigma", k)
+            .map_err(|e| CalibrationError::BadInput(e.to_string()))?;
+    }
     if train.rows.is_empty() {
         return bad(format!("{}: no rows to fit", train.file));
     }

@@ -13,7 +13,7 @@
 //! capture_noise_m = 5e-4                        # capture noise std per coordinate (m), > 0
 //! fit_capture_frame = true                      # fit the 6 capture-frame parameters
 //! fit_marker_offset = true                      # fit the 3 marker-offset parameters
-//! # huber_sigma = 3.0                           # Huber threshold in noise sigmas (absent: plain least squares)
+//! # huber_sigma = 3.0                           # Huber threshold in noise sigmas, >= 1e-3 (absent: plain least squares)
 //! max_iterations = 30
 //! capture_to_base = { rotation_vector = [0, 0, 0], translation_m = [0, 0, 0] }  # x_base = R x_capture + t
 //!
@@ -165,6 +165,11 @@ pub struct CalibrationSpec {
     /// Fit the marker offset (default true).
     pub fit_marker_offset: bool,
     /// Huber threshold in noise sigmas (per marker point); `None` = least squares.
+    /// Finite and at least [`MIN_HUBER_SIGMA`] (1e-3): below it nearly every point
+    /// is past the threshold, the loss is `k` times an L1 loss (the same estimate at
+    /// any smaller `k`) and only its gradient shrinks with `k`, down to the LM's
+    /// absolute stopping floor, so a tiny `k` (or a subnormal one) would report
+    /// "converged" at the start.
     pub huber_sigma: Option<f64>,
     /// Levenberg-Marquardt iteration limit (default 30).
     pub max_iterations: usize,
@@ -195,6 +200,26 @@ impl Default for CalibrationSpec {
     }
 }
 
+/// Smallest Huber threshold (noise sigmas) accepted: see
+/// [`CalibrationSpec::huber_sigma`].
+pub const MIN_HUBER_SIGMA: f64 = 1e-3;
+
+/// A Huber threshold `k` (noise sigmas): finite and at least [`MIN_HUBER_SIGMA`].
+pub(crate) fn check_huber_sigma(field: &str, k: f64) -> Result<f64, ModelError> {
+    ModelError::positive(field, k)?;
+    if k < MIN_HUBER_SIGMA {
+        return Err(ModelError::OutOfRange {
+            field: field.into(),
+            value: k,
+            why: format!(
+                "a Huber threshold below {MIN_HUBER_SIGMA} noise sigmas makes every point an outlier \
+                 and only scales the loss down toward the fit's stopping floor (omit it for least squares)"
+            ),
+        });
+    }
+    Ok(k)
+}
+
 impl CalibrationSpec {
     /// Check every number (field paths start with `calibration.`).
     pub fn validate(&self) -> Result<(), ModelError> {
@@ -212,7 +237,7 @@ impl CalibrationSpec {
             ModelError::non_negative("calibration.marker_s_m", s)?;
         }
         if let Some(h) = self.huber_sigma {
-            ModelError::positive("calibration.huber_sigma", h)?;
+            check_huber_sigma("calibration.huber_sigma", h)?;
         }
         for (i, c) in self.marker_columns.iter().enumerate() {
             if c.trim().is_empty() {

@@ -51,7 +51,7 @@ pub enum ExperimentError {
     #[error(transparent)]
     Data(#[from] DataError),
     /// A setting is out of range.
-    #[error("{field} = {value} is out of range: {why}")]
+    #[error("{field} = {} is out of range: {why}", crate::error::Num(*.value))]
     Setting {
         /// Field path, e.g. `pareto.reps`.
         field: String,

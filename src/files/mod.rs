@@ -2,6 +2,7 @@
 //! The core (everything above this module) never reads files.
 
 pub mod demo;
+pub(crate) mod json;
 pub mod load_cells;
 pub mod measure;
 pub mod readings;

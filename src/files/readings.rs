@@ -60,7 +60,8 @@ pub struct ReadingsSpec {
     /// row stamped `t` is solved with the readings linearly interpolated at
     /// `t - time_offset_s` (> 0: the capture lags the log), inside blocks of rows
     /// at most 3 s apart, clamped at a block's ends; needs the time column. See
-    /// `calibrate::conditioning`. Calibration path `readings/time_offset_s`.
+    /// `calibrate::conditioning`. Calibration path `readings/time_offset_s`. At most
+    /// [`MAX_TIME_OFFSET_S`] (10 s) in magnitude.
     pub time_offset_s: f64,
     /// Backlash between each servo and its tendon (m, >= 0, default 0): the tendon
     /// follows the (time-shifted) reading with a play of this width (loading and
@@ -68,6 +69,15 @@ pub struct ReadingsSpec {
     /// `readings/backlash_m`.
     pub backlash_m: f64,
 }
+
+/// Largest magnitude (s) of `[readings] time_offset_s`: a latency between a servo
+/// log and a capture (0.053 s calibrated on the FTDCR v4). Readings are interpolated
+/// at `t - offset` inside blocks of rows at most 3 s apart, clamped at a block's
+/// ends, so an offset far beyond that gap only clamps every row to its block's first
+/// (or last) reading, and a stream keeps every row back to `t - offset`; 10 s leaves
+/// room for an unsynchronised clock and refuses a value in ms read as s (53 for
+/// 0.053) as well as an absurd one (1e300, where `t - offset == -offset`).
+pub const MAX_TIME_OFFSET_S: f64 = 10.0;
 
 impl Default for ReadingsSpec {
     fn default() -> Self {
@@ -92,6 +102,17 @@ impl ReadingsSpec {
             crate::ModelError::positive("readings.length_scale_m", l)?;
         }
         crate::ModelError::finite("readings.time_offset_s", self.time_offset_s)?;
+        if self.time_offset_s.abs() > MAX_TIME_OFFSET_S {
+            return Err(crate::ModelError::OutOfRange {
+                field: "readings.time_offset_s".into(),
+                value: self.time_offset_s,
+                why: format!(
+                    "a latency between the servo log and the capture is at most {MAX_TIME_OFFSET_S} s \
+                     in magnitude (a larger one clamps every row to a block's first or last reading, \
+                     freezing the tip; is it in ms?)"
+                ),
+            });
+        }
         crate::ModelError::non_negative("readings.backlash_m", self.backlash_m)?;
         Ok(())
     }
@@ -324,9 +345,12 @@ impl ReadingsParser {
     fn json_row(&mut self, line: usize, t: &str) -> Result<ReadingRow, LineError> {
         let v: serde_json::Value =
             serde_json::from_str(t).map_err(|e| Self::err(line, "json", e.to_string()))?;
-        let obj = v
-            .as_object()
-            .ok_or_else(|| Self::err(line, "json", "a row must be an object"))?;
+        if !v.is_object() {
+            return Err(Self::err(line, "json", "a row must be an object"));
+        }
+        // `Value` keeps the last of two equal keys: parse again refusing a repeat
+        let obj = &crate::files::json::unique_object(t)
+            .map_err(|e| Self::err(line, "json", e.to_string()))?;
         if let Some(name) = self.unknown_measurement_column(obj.keys().map(String::as_str)) {
             return Err(self.unknown_measurement(line, &name));
         }

@@ -63,7 +63,7 @@ pub enum LadderError {
     #[error(transparent)]
     Model(#[from] ModelError),
     /// A setting of a curvature rung is out of range.
-    #[error("{field} = {value} is out of range: {why}")]
+    #[error("{field} = {} is out of range: {why}", crate::error::Num(*.value))]
     Setting {
         /// Field path, e.g. `pcc.pieces_per_section`.
         field: String,

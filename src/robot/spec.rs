@@ -415,7 +415,7 @@ impl GuideSpec {
                 value: self.holes.radius_m,
                 why: format!(
                     "holes must lie on the disk (radius <= diameter_m / 2 = {})",
-                    self.diameter_m / 2.0
+                    crate::error::Num(self.diameter_m / 2.0)
                 ),
             });
         }

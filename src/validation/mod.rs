@@ -91,7 +91,7 @@ pub enum ValidationError {
     },
     /// The scene no longer deserializes after writing a value (e.g. a float into
     /// an integer field).
-    #[error("setting `{path}` = {value} breaks the scene: {why}")]
+    #[error("setting `{path}` = {} breaks the scene: {why}", crate::error::Num(*.value))]
     SetFailed {
         /// The path.
         path: String,

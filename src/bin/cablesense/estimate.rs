@@ -1,7 +1,7 @@
 //! `cablesense estimate SCENE --measure FILE`: a batch of encoder samples.
 
 use crate::stream::{
-    error_json, estimate_json, estimator, open_input, parser, process, MODEL_HELP,
+    error_json, estimate_json, estimator, no_rows, open_watched, parser, process, MODEL_HELP,
 };
 use anyhow::Context;
 use std::io::BufRead;
@@ -45,8 +45,12 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         } else {
             crate::tendon_estimate::Output::Text
         };
-        let (_, poor, bad) =
-            crate::tendon_estimate::stream(&scene, &a.scene, open_input(&a.measure)?, output)?;
+        let (reader, content) = open_watched(&a.measure)?;
+        let (rows, poor, bad) = crate::tendon_estimate::stream(&scene, &a.scene, reader, output)?;
+        if let Some(why) = no_rows(&a.measure, rows + bad, &content) {
+            eprintln!("error: {why}");
+            return Ok(ExitCode::from(1));
+        }
         return Ok(if poor + bad == 0 {
             ExitCode::SUCCESS
         } else {
@@ -55,8 +59,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
     let (scene, mut est) = estimator(&a.scene, &a.model)?;
     let mut p = parser(&scene, &est);
-    let file = open_input(&a.measure)?;
-    let mut bad = 0usize;
+    let (file, content) = open_watched(&a.measure)?;
+    // rows read, good or bad (none: an error below)
+    let (mut rows, mut bad) = (0usize, 0usize);
     if !a.json {
         let names = est.names().join("  ");
         println!(
@@ -84,6 +89,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         match parsed.and_then(|l| p.line(i + 1, &l)) {
             Ok(None) => {}
             Ok(Some(s)) => {
+                rows += 1;
                 let e = process(&mut est, &s);
                 if !matches!(e.status, cablesense::estimate::EstimateStatus::Converged)
                     || e.fit == cablesense::estimate::Fit::Poor
@@ -114,6 +120,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 }
             }
             Err(err) => {
+                rows += 1;
                 bad += 1;
                 if a.json {
                     println!("{}", error_json(&err));
@@ -125,6 +132,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 }
             }
         }
+    }
+    if let Some(why) = no_rows(&a.measure, rows, &content) {
+        eprintln!("error: {why}");
+        return Ok(ExitCode::from(1));
     }
     Ok(if bad == 0 {
         ExitCode::SUCCESS

@@ -28,8 +28,8 @@ pub struct Args {
     /// Output directory for pareto.csv and the SVG charts.
     #[arg(long, default_value = "out/pareto")]
     out: PathBuf,
-    /// Timed repetitions per rung and load (median reported).
-    #[arg(long, default_value_t = 7)]
+    /// Timed repetitions per rung and load (median reported); at least 1.
+    #[arg(long, default_value_t = 7, value_parser = parse_reps)]
     reps: usize,
     /// Skip the estimator ticks (forward solves only).
     #[arg(long)]
@@ -37,6 +37,22 @@ pub struct Args {
     /// No progress bar or status lines on stderr.
     #[arg(long, short)]
     quiet: bool,
+}
+
+/// `--reps`: a whole number of at least 1 (the median of no timed repetition is
+/// undefined, so 0 is refused rather than raised to 1).
+fn parse_reps(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|e| format!("`{s}` is not a whole number of repetitions ({e})"))?;
+    if n == 0 {
+        return Err(
+            "0 repetitions: at least 1 is needed (the median of no timed solve is undefined)"
+                .into(),
+        );
+    }
+    Ok(n)
 }
 
 /// Progress of a library experiment on the bar (shared with `stability`).
@@ -56,7 +72,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         a.scenes.clone()
     };
     let settings = ParetoSettings {
-        reps: a.reps.max(1),
+        reps: a.reps,
         estimator: !a.no_estimator,
         rungs: None,
     };

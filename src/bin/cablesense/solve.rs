@@ -86,6 +86,8 @@ fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Re
         }
         label => readings_rung_by_label(&scene.build_robot()?, label)?,
     };
+    // (an empty file, or a header alone, is an error below: nothing was solved)
+    let (reader, content) = crate::stream::open_watched(path)?;
     let (solved, converged, bad) = match rung {
         Rung::Rod(numerics) => {
             let mut samples = match &a.samples {
@@ -102,7 +104,7 @@ fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Re
             stream(
                 &scene,
                 &a.scene,
-                open()?,
+                reader,
                 output,
                 samples.as_mut().map(|w| w as &mut dyn std::io::Write),
             )?
@@ -114,9 +116,13 @@ fn solve_readings(a: &Args, scene: &Scene, path: &std::path::Path) -> anyhow::Re
                     other.label()
                 );
             }
-            stream_kinematics(scene, &a.scene, &other, open()?, output)?
+            stream_kinematics(scene, &a.scene, &other, reader, output)?
         }
     };
+    if let Some(why) = crate::stream::no_rows(path, solved + bad, &content) {
+        eprintln!("error: {why}");
+        return Ok(ExitCode::from(1));
+    }
     if !a.json {
         println!("{solved} rows solved, {converged} converged, {bad} bad rows");
     }

@@ -63,6 +63,88 @@ pub fn open_file(p: &Path) -> anyhow::Result<std::fs::File> {
     Ok(file)
 }
 
+/// Whether an input gave any line with more than white space (shared with the
+/// [`Watched`] reader that records it).
+pub type Content = std::rc::Rc<std::cell::Cell<bool>>;
+
+/// A reader that records in a [`Content`] flag whether any line it gave had more
+/// than white space (a line that is not UTF-8 counts as content).
+pub struct Watched<R> {
+    inner: R,
+    content: Content,
+}
+
+impl<R: std::io::BufRead> Watched<R> {
+    /// Watch `inner`; the flag to read after the stream.
+    pub fn new(inner: R) -> (Self, Content) {
+        let content = Content::default();
+        (
+            Self {
+                inner,
+                content: content.clone(),
+            },
+            content,
+        )
+    }
+}
+
+impl<R: std::io::BufRead> std::io::Read for Watched<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if buf[..n].iter().any(|b| !b.is_ascii_whitespace()) {
+            self.content.set(true);
+        }
+        Ok(n)
+    }
+}
+
+impl<R: std::io::BufRead> std::io::BufRead for Watched<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        self.inner.fill_buf()
+    }
+    fn consume(&mut self, amt: usize) {
+        self.inner.consume(amt)
+    }
+    // `Lines` reads through `read_line`: look at each line here
+    fn read_line(&mut self, buf: &mut String) -> std::io::Result<usize> {
+        let start = buf.len();
+        let n = self.inner.read_line(buf).inspect_err(|e| {
+            if e.kind() == std::io::ErrorKind::InvalidData {
+                self.content.set(true);
+            }
+        })?;
+        if !buf[start..].trim().is_empty() {
+            self.content.set(true);
+        }
+        Ok(n)
+    }
+}
+
+/// Open an input file (`demo:NAME` for a shipped one) for reading by lines, with
+/// the flag that says whether it had any content (see [`no_rows`]).
+pub fn open_watched(arg: &Path) -> anyhow::Result<(Box<dyn std::io::BufRead>, Content)> {
+    let (r, content) = Watched::new(open_input(arg)?);
+    Ok((Box::new(r), content))
+}
+
+/// The error for an input file that gave no row at all (`rows` counts good and
+/// bad rows): an empty file, or one with a header and nothing after it. A named
+/// file of rows with none is fatal like a bad stream header (exit code 1), since a
+/// run over nothing would look like a clean one; standard input with no row is not
+/// (a control loop whose producer stopped before its first row), see `track`.
+pub fn no_rows(arg: &Path, rows: usize, content: &Content) -> Option<String> {
+    (rows == 0).then(|| {
+        if content.get() {
+            format!(
+                "{}: no rows: a header (or comments) and no data row after it",
+                arg.display()
+            )
+        } else {
+            format!("{}: no rows: the file is empty", arg.display())
+        }
+    })
+}
+
 /// A line of a row stream: a line that is not UTF-8 is reported and skipped (the
 /// stream goes on, `Ok(Err(..))`); any other read error stops the stream, since
 /// reading on would fail the same way for every later line.

@@ -1,7 +1,7 @@
 //! `cablesense track [SCENE]`: streaming estimation, one JSON line per input row.
 
 use crate::stream::{
-    error_json, estimate_json, estimator, open_input, parser, process, MODEL_HELP,
+    error_json, estimate_json, estimator, no_rows, open_watched, parser, process, MODEL_HELP,
 };
 use cablesense::files::demo;
 use std::io::{BufRead, Write};
@@ -59,41 +59,48 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             );
         }
     }
+    // rows from --input FILE, or standard input; a file that gives no row is an
+    // error (exit code 1), standard input that closes before its first row is not
+    // (the producer of a control loop stopped)
+    let (reader, content): (Box<dyn BufRead>, _) = match &input {
+        Some(f) => open_watched(f)?,
+        None => (
+            Box::new(std::io::BufReader::new(std::io::stdin())),
+            Default::default(),
+        ),
+    };
+    let finish = |rows: usize| {
+        let why = input.as_ref().and_then(|f| no_rows(f, rows, &content));
+        if let Some(why) = why {
+            eprintln!("error: {why}");
+            return ExitCode::from(1);
+        }
+        ExitCode::SUCCESS
+    };
     if crate::readings::is_tendon_scene(&scene) && scene.estimate.is_none() {
         // servo readings in, shape per row out (the control-loop case)
-        let reader: Box<dyn BufRead> = match &input {
-            Some(f) => open_input(f)?,
-            None => Box::new(std::io::BufReader::new(std::io::stdin())),
-        };
-        crate::readings::stream(
+        let (solved, _, bad) = crate::readings::stream(
             &scene,
             &scene_path,
             reader,
             crate::readings::Output::Json,
             None,
         )?;
-        return Ok(ExitCode::SUCCESS);
+        return Ok(finish(solved + bad));
     }
     if crate::readings::is_tendon_scene(&scene) {
         // servo readings and load cells in, unknown loads per row out
-        let reader: Box<dyn BufRead> = match &input {
-            Some(f) => open_input(f)?,
-            None => Box::new(std::io::BufReader::new(std::io::stdin())),
-        };
-        crate::tendon_estimate::stream(
+        let (rows, _, bad) = crate::tendon_estimate::stream(
             &scene,
             &scene_path,
             reader,
             crate::tendon_estimate::Output::Json,
         )?;
-        return Ok(ExitCode::SUCCESS);
+        return Ok(finish(rows + bad));
     }
     let (scene, mut est) = estimator(&scene_path, &a.model)?;
     let mut p = parser(&scene, &est);
-    let reader: Box<dyn BufRead> = match &input {
-        Some(f) => open_input(f)?,
-        None => Box::new(std::io::BufReader::new(std::io::stdin())),
-    };
+    let mut rows = 0usize;
     let mut tips = Vec::new();
     // the estimator after the last good row, its whole warm state (the model's
     // shooting unknowns and reused Jacobians included): a bad row is rolled back to
@@ -105,6 +112,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         let line = match crate::stream::stream_line(line, i + 1)? {
             Ok(l) => l,
             Err(e) => {
+                rows += 1;
                 writeln!(
                     out,
                     "{}",
@@ -116,6 +124,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         match p.line(i + 1, &line) {
             Ok(None) => {}
             Ok(Some(s)) => {
+                rows += 1;
                 let e = process(&mut est, &s);
                 // a row that stalls, fails or fits poorly must not become the next
                 // row's warm start: roll back to the state this row started from
@@ -134,6 +143,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 }
             }
             Err(err) => {
+                rows += 1;
                 writeln!(out, "{}", error_json(&err))?;
                 if err.fatal {
                     eprintln!("error: {err}");
@@ -146,5 +156,5 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if let Some(dir) = &a.plot {
         crate::plot_track::write(dir, &scene_path, &mut est, tips)?;
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(finish(rows))
 }
