@@ -76,7 +76,13 @@ fn tolerance_below_the_round_off_floor_is_raised_to_it() {
         let floor = ws.residual_floor();
         assert!(floor > 1e-14 && floor < 1e-9, "floor {floor:e}");
         let report = ws.solve(Start::Cold);
-        assert_eq!(report.tolerance, tolerance.max(floor), "{report:?}");
+        // raised to the floor, never lowered; the condensed coupling (this scene's)
+        // may raise it further by a measured settle noise, never near 1e-8
+        let base = tolerance.max(floor);
+        assert!(
+            report.tolerance == base || (report.tolerance > base && report.tolerance < 1e-8),
+            "{report:?} base {base:e}"
+        );
         assert!(
             report.status.is_converged(),
             "tolerance {tolerance:e}: {report:?}"
