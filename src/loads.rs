@@ -113,7 +113,48 @@ impl Loads {
         {
             ModelError::non_negative(format!("loads.tensions_n[{j}]"), self.tensions_n[j])?;
         }
+        self.check_tensions(robot)?;
         self.check_weight(robot)
+    }
+
+    /// The cable tensions each section carries (every cable that ends in it or beyond
+    /// pulls its disks towards the base plate, so the backbone between them carries the
+    /// tension as axial compression) must stay below the section's axial stiffness `EA`,
+    /// as the weight must (`check_weight`): a sum of `EA` is an axial strain of
+    /// -1. Before, a tension of 1e6 N on a 1.56 mm rod (`EA` 1.2e5 N) ended `Stalled`
+    /// with an infinite residual and no reason. Names the largest such tension.
+    /// Allocation-free when it passes.
+    fn check_tensions(&self, robot: &Robot) -> Result<(), ModelError> {
+        let cables = robot.cables();
+        for (i, sec) in robot.sections().iter().enumerate() {
+            let through = || {
+                self.tensions_n
+                    .iter()
+                    .enumerate()
+                    .filter(move |(j, _)| cables[*j].end_section >= i)
+            };
+            let sum: f64 = through().map(|(_, t)| t).sum();
+            let ea = sec.stiffness.shear_stretch.z;
+            if sum < ea {
+                continue;
+            }
+            let (j, t) = through().fold(
+                (0, f64::NEG_INFINITY),
+                |m, (j, t)| if *t > m.1 { (j, *t) } else { m },
+            );
+            return Err(ModelError::OutOfRange {
+                field: format!("loads.tensions_n[{j}]"),
+                value: t,
+                why: format!(
+                    "the cable tensions section {i} carries ({} N in all) reach its axial \
+                     stiffness EA = {} N: an axial strain of -1 or beyond (the rod pressed \
+                     to zero length or inverted), not a physical state",
+                    crate::error::Num(sum),
+                    crate::error::Num(ea)
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// The weight each section carries (rod, guide disks and point masses from its

@@ -1364,3 +1364,24 @@ fn scene_weight_beyond_the_axial_stiffness_names_the_density() {
     );
     assert!(!r.stdout.contains("Converged"), "{}", r.stdout);
 }
+
+/// A cable tension of 1e6 N on the demo's 1.56 mm Nitinol rod (EA 1.2e5 N) ended
+/// `Stalled` with an infinite residual and no reason. Tensions whose sum through a
+/// section reaches its axial stiffness EA are refused, naming the largest one.
+#[test]
+fn scene_tension_beyond_the_axial_stiffness_names_the_tension() {
+    let r = solve_scene(
+        "t1e6",
+        "s.toml",
+        &scene_with(DEMO, "tensions_n = [1.5,", "tensions_n = [1e6,"),
+    );
+    assert_error(
+        &r,
+        &[
+            "loads.tensions_n[0] = 1000000",
+            "axial stiffness EA",
+            "section 0",
+        ],
+    );
+    assert!(!r.stdout.contains("Converged"), "{}", r.stdout);
+}

@@ -412,9 +412,20 @@ fn absurd_loads_and_data_never_panic_hang_or_give_nan() {
             for g in [1e3, 1e6, 1e12] {
                 for start in [Start::Cold, Start::Warm] {
                     let t0 = Instant::now();
-                    let rep = m
-                        .solve(&loads_at(&robot, &sc.loads, dir, g), start)
-                        .unwrap();
+                    let rep = match m.solve(&loads_at(&robot, &sc.loads, dir, g), start) {
+                        Ok(rep) => rep,
+                        // a cable tension at or above the rod's axial stiffness EA
+                        // (from 1e6 here: 4.7e6 N against EA 1.2e5 N) is refused
+                        Err(e) => {
+                            let e = e.to_string();
+                            assert!(
+                                dir == Dir::Tension && e.contains("axial stiffness EA"),
+                                "{} {dir:?} {g}: {e}",
+                                rung.label()
+                            );
+                            continue;
+                        }
+                    };
                     let dt = t0.elapsed().as_secs_f64();
                     assert!(dt < 5.0, "{} {dir:?} {g}: {dt} s", rung.label());
                     if rep.status.is_converged() {
