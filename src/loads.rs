@@ -142,17 +142,11 @@ impl Loads {
                 (0, f64::NEG_INFINITY),
                 |m, (j, t)| if *t > m.1 { (j, *t) } else { m },
             );
-            return Err(ModelError::OutOfRange {
-                field: format!("loads.tensions_n[{j}]"),
-                value: t,
-                why: format!(
-                    "the cable tensions section {i} carries ({} N in all) reach its axial \
-                     stiffness EA = {} N: an axial strain of -1 or beyond (the rod pressed \
-                     to zero length or inverted), not a physical state",
-                    crate::error::Num(sum),
-                    crate::error::Num(ea)
-                ),
-            });
+            let what = format!(
+                "the cable tensions section {i} carries ({} N in all) reach",
+                crate::error::Num(sum)
+            );
+            return Err(beyond_ea(format!("loads.tensions_n[{j}]"), t, what, ea));
         }
         Ok(())
     }
@@ -218,19 +212,28 @@ impl Loads {
                     }
                 }
             }
-            return Err(ModelError::OutOfRange {
-                field,
-                value,
-                why: format!(
-                    "the weight section {i} carries from its base to the tip ({} N at |g| = {} m/s^2) \
-                     reaches its axial stiffness EA = {} N: an axial strain of -1 or beyond (the rod \
-                     pressed to zero length or inverted), not a physical state",
-                    crate::error::Num(weight),
-                    crate::error::Num(g),
-                    crate::error::Num(ea)
-                ),
-            });
+            let what = format!(
+                "the weight section {i} carries from its base to the tip ({} N at |g| = {} m/s^2) \
+                 reaches",
+                crate::error::Num(weight),
+                crate::error::Num(g)
+            );
+            return Err(beyond_ea(field, value, what, ea));
         }
         Ok(())
+    }
+}
+
+/// `field = value` is out of range because `what` (an axial load, ending in "reach" or
+/// "reaches") a section's axial stiffness `ea`: an axial strain of -1 or beyond.
+fn beyond_ea(field: String, value: f64, what: String, ea: f64) -> ModelError {
+    ModelError::OutOfRange {
+        field,
+        value,
+        why: format!(
+            "{what} its axial stiffness EA = {} N: an axial strain of -1 or beyond (the rod \
+             pressed to zero length or inverted), not a physical state",
+            crate::error::Num(ea)
+        ),
     }
 }

@@ -190,7 +190,7 @@ impl Workspace {
             tip_first: Vector3::zeros(),
             last_intensity: 0.0,
             tol: tolerance,
-            noise: SettleNoise::new(n),
+            noise: SettleNoise::new(n, plan.condensed),
             branch_verdict: false,
             dx: vec![0.0; n],
             res: vec![0.0; n],

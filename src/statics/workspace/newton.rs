@@ -86,7 +86,7 @@ impl Workspace {
             Ok(y) => {
                 self.tip = y.r;
                 let local = self.b64.local_tol;
-                if !trial && self.plan.condensed {
+                if !trial {
                     // a second settled evaluation of the same point: its settle noise
                     let (x, old, new) = (&self.x, &self.res, &self.b64.res);
                     self.tol = self.noise.raised(self.tol, x, lam, local, old, new);

@@ -28,14 +28,19 @@ use super::super::pass::LOCAL_TOL;
 /// (`LOCAL_TOL`) pass of this solve at load scale `lam`.
 #[derive(Clone, Debug)]
 pub(super) struct SettleNoise {
+    /// Whether the plan settles next holes (the condensed coupling): else the record
+    /// is never kept or read, and a pass costs no copy of the unknowns.
+    active: bool,
     x: Vec<f64>,
     lam: Option<f64>,
 }
 
 impl SettleNoise {
-    pub(super) fn new(n: usize) -> Self {
+    /// For `n` unknowns; `active` when the plan settles next holes.
+    pub(super) fn new(n: usize, active: bool) -> Self {
         Self {
-            x: vec![0.0; n],
+            active,
+            x: vec![0.0; if active { n } else { 0 }],
             lam: None,
         }
     }
@@ -48,7 +53,7 @@ impl SettleNoise {
 
     /// `res` now belongs to `x` at `lam`, evaluated with settle tolerance `local_tol`.
     pub(super) fn record(&mut self, x: &[f64], lam: f64, local_tol: f64) {
-        if local_tol <= LOCAL_TOL && self.x.len() == x.len() {
+        if self.active && local_tol <= LOCAL_TOL && self.x.len() == x.len() {
             self.x.copy_from_slice(x);
             self.lam = Some(lam);
         } else {
@@ -68,7 +73,7 @@ impl SettleNoise {
         old: &[f64],
         new: &[f64],
     ) -> f64 {
-        if self.lam != Some(lam) || local_tol > LOCAL_TOL || self.x != x {
+        if !self.active || self.lam != Some(lam) || local_tol > LOCAL_TOL || self.x != x {
             return tol;
         }
         let d = old
@@ -91,7 +96,7 @@ mod tests {
     /// raises the tolerance, by `FLOOR_SAFETY` times the largest difference.
     #[test]
     fn only_the_same_settled_point_raises_the_tolerance() {
-        let mut n = SettleNoise::new(2);
+        let mut n = SettleNoise::new(2, true);
         let (old, new) = ([1e-10, -2e-10], [2e-10, -1e-10]);
         let x = [0.5, 0.25];
         // nothing recorded yet
@@ -117,5 +122,9 @@ mod tests {
         // never lowers
         n.record(&x, 1.0, LOCAL_TOL);
         assert_eq!(n.raised(1.0, &x, 1.0, LOCAL_TOL, &old, &new), 1.0);
+        // a plan without settled holes keeps nothing and raises nothing
+        let mut off = SettleNoise::new(2, false);
+        off.record(&x, 1.0, LOCAL_TOL);
+        assert_eq!(off.raised(1e-10, &x, 1.0, LOCAL_TOL, &old, &new), 1e-10);
     }
 }
