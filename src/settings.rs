@@ -194,6 +194,16 @@ pub struct SolverSettings {
     pub max_continuation_steps: usize,
     /// How tensioned cables' next-chord directions are resolved (default `condensed`).
     pub cable_coupling: CableCoupling,
+    /// Rounds of the `arc` coupling's next-hole prediction at a disk (default 3;
+    /// between 1 and 100; read only under `cable_coupling = "arc"`). Each round is
+    /// about a tenth of a warm FTDCR v4 row's instructions; the rounds start from
+    /// the mirrored chords corrected as the disks just before were, and converge to
+    /// the arc's fixed point by about `sum T (h^2/6 + rho h/2) / EI` a round. On the
+    /// 443 FTDCR v4 val rows, tips from the fixed point's: 2 rounds 6.7 um mean (max
+    /// 60 um), 3 rounds 0.66 um (max 5.3 um); the fixed point is 3.3 um from
+    /// `condensed` (`statics::pass::arc`, `tests/arc_coupling.rs`).
+    #[serde(skip_serializing_if = "is_default_arc_rounds")]
+    pub arc_rounds: usize,
     /// Keep solves on the branch reached by loading the rod from rest (default true):
     /// - world-fixed loads without tensioned cables: a cold solve's equilibrium that
     ///   fails Jacobi's condition is `unstable` (one extra dual sweep per cold solve);
@@ -213,6 +223,11 @@ pub struct SolverSettings {
     pub tendons: TendonSettings,
 }
 
+/// `arc_rounds` at its default (a scene then leaves it out).
+fn is_default_arc_rounds(n: &usize) -> bool {
+    *n == crate::statics::ARC_ROUNDS
+}
+
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
@@ -224,6 +239,7 @@ impl Default for SolverSettings {
             continuation: true,
             max_continuation_steps: 32,
             cable_coupling: CableCoupling::default(),
+            arc_rounds: crate::statics::ARC_ROUNDS,
             branch_guard: true,
             tendons: TendonSettings::default(),
         }
@@ -260,6 +276,13 @@ impl SolverSettings {
                 field: "numerics.max_iterations".into(),
                 value: self.max_iterations as f64,
                 why: "between 1 and 10000".into(),
+            });
+        }
+        if self.arc_rounds == 0 || self.arc_rounds > 100 {
+            return Err(ModelError::OutOfRange {
+                field: "numerics.arc_rounds".into(),
+                value: self.arc_rounds as f64,
+                why: "between 1 and 100".into(),
             });
         }
         if self.max_continuation_steps > 10_000 {

@@ -335,6 +335,24 @@ fn scene_zero_rk4_steps_names_field_and_value() {
     assert_error(&r, &["numerics.integrator.rk4.steps_per_section", "0"]);
 }
 
+/// `numerics.arc_rounds` of 0 or above 100 (the shipped FTDCR v4 scene sets 2), named
+/// with its value.
+#[test]
+fn scene_arc_rounds_out_of_range_names_field_and_value() {
+    for bad in ["0", "101"] {
+        let r = solve_scene(
+            "arcrounds",
+            "s.toml",
+            &scene_with(
+                "data/scenes/ftdcr_v4.toml",
+                "arc_rounds = 2",
+                &format!("arc_rounds = {bad}"),
+            ),
+        );
+        assert_error(&r, &["numerics.arc_rounds", bad]);
+    }
+}
+
 /// `[numerics.tendons]`: a non-positive tendon tolerance, a zero iteration limit and
 /// a misspelt key, each named.
 #[test]

@@ -14,8 +14,8 @@ mod pass;
 mod plan;
 mod workspace;
 
-pub(crate) use pass::LOCAL_TOL;
 pub use pass::{Pose, Sample};
+pub(crate) use pass::{ARC_ROUNDS, LOCAL_TOL};
 pub use plan::ParamSite;
 pub use workspace::joint::RhsCounts;
 pub use workspace::{Start, Workspace};

@@ -11,6 +11,7 @@
 //! inside the pass (module `condensed`).
 
 mod arc;
+pub(crate) use arc::ARC_ROUNDS;
 // The pass's buffers and what it records.
 mod buf;
 mod condensed;
@@ -89,6 +90,8 @@ pub(crate) fn pass<T: Real>(
 ) -> Result<State<T>, PassError> {
     let (fs, ms, ls) = (plan.force_scale, plan.moment_scale, plan.length);
     debug_assert_eq!(buf.theta.len(), plan.params.len());
+    // no guide of this pass has corrected its rounds yet (`arc`)
+    buf.arc_corr_g = usize::MAX;
     let mut y = State {
         r: v3::<T>(&plan.base_r),
         rot: plan.base_rot.map(T::cst),

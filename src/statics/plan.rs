@@ -161,6 +161,13 @@ pub(crate) struct Plan {
     /// Arc coupling, per guide: the chords on to a predicted next hole, in the order
     /// of `guide_cables` (the tensioned cables that go on). Empty otherwise.
     pub arc_chords: Vec<Vec<ArcChord>>,
+    /// Arc coupling, per guide: how many of the guides just before it (0, 1 or 2)
+    /// send their chords on along the same cables in the same order, so that their
+    /// rounds' corrections start this guide's rounds (`statics::pass::arc`).
+    pub arc_carry: Vec<u8>,
+    /// Arc coupling: rounds of the next-hole prediction at a disk
+    /// ([`SolverSettings::arc_rounds`]).
+    pub arc_rounds: usize,
     /// Local dual directions a sweep carries: [`JUMP_DIRS`] when `condensed`, else 0.
     pub max_local: usize,
     /// Largest `3 * pending[g].len()`: the size of a segment's local iteration.
@@ -401,6 +408,18 @@ impl Plan {
                 out
             })
             .collect();
+        let same_cables = |a: &[ArcChord], b: &[ArcChord]| {
+            !a.is_empty() && a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.cable == y.cable)
+        };
+        let arc_carry: Vec<u8> = (0..arc_chords.len())
+            .map(|g| match g {
+                0 => 0,
+                _ if !same_cables(&arc_chords[g], &arc_chords[g - 1]) => 0,
+                1 => 1,
+                _ if !same_cables(&arc_chords[g - 1], &arc_chords[g - 2]) => 1,
+                _ => 2,
+            })
+            .collect();
         let ei = robot.sections()[0].stiffness.bend_twist.x;
         let mut plan = Self {
             intervals,
@@ -442,6 +461,8 @@ impl Plan {
             condensed,
             arc,
             arc_chords,
+            arc_carry,
+            arc_rounds: settings.arc_rounds,
             pending,
             max_local,
             max_pending_dirs,

@@ -318,6 +318,12 @@ impl Workspace {
         self.set_theta(theta);
     }
 
+    /// The plan its passes run (tests of the pass itself).
+    #[cfg(test)]
+    pub(crate) fn plan_mut(&mut self) -> &mut Plan {
+        &mut self.plan
+    }
+
     /// Current load parameters.
     pub fn theta(&self) -> &[f64] {
         &self.b64.theta

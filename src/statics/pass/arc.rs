@@ -25,10 +25,15 @@
 //! `t d/|d|` along `d = tau + E rho' - rho` in this disk's frame, rotated to the world
 //! by `R` (the moment `R (rho x f)` likewise). The state after the jump (`n+`,
 //! `m+`) depends on these forces, so the prediction and the jump are iterated
-//! [`ARC_ITERATIONS`] times, starting from each chord on as the mirror image of its
-//! chord back through the disk's plane (exact on a circular arc of equal gaps): a
-//! fixed count, so the pass stays an explicit, smooth function of the unknowns and
-//! dual passes give its exact derivatives.
+//! [`SolverSettings::arc_rounds`] times (rounds; default [`ARC_ROUNDS`]), starting from each chord on as the mirror image
+//! of its chord back through the disk's plane (exact on a circular arc of equal
+//! gaps), corrected by what the rounds changed at the disks just before: the last
+//! disk's correction (force and moment in the disk's frame), or its linear
+//! extrapolation `2 c_1 - c_2` from the last two, when those disks send their chords
+//! on along the same cables (`Plan::arc_carry`; along a segment the curvature
+//! changes smoothly from disk to disk, so the corrections do too). A fixed count
+//! and a start computed within the same pass, so the pass stays an explicit, smooth
+//! function of the unknowns and dual passes give its exact derivatives.
 //!
 //! What it neglects: the moment's terms beyond second order in `s` (a hole error of
 //! about `h theta^4` for a gap bending by `theta`), the distributed load on the gap,
@@ -40,15 +45,21 @@
 use super::{actuator_tension, unit, v3, PassBuf};
 use crate::integrate::{Coeffs, State};
 use crate::math::{cross, mat_t_vec, mat_vec, mat_vec_f64, Real};
+#[cfg(doc)]
+use crate::settings::SolverSettings;
 use crate::statics::plan::Plan;
 use nalgebra::{Matrix3, Vector3};
 
-/// Rounds of "predict the next holes from the jump of the last round" at a disk
-/// (the mirrored chords give the first jump). On the 443 FTDCR v4 val rows, tips
-/// against the condensed coupling: 2 rounds 33 um mean (max 0.33 mm), 3 rounds 8 um
-/// (max 84 um), 8 rounds 3.3 um (max 25 um, the arc's own error); the cost of a
-/// round is most of a pass's (`examples/tendon_profile.rs`, `COUPLING=arc`).
-pub(crate) const ARC_ITERATIONS: usize = 3;
+/// Default rounds of "predict the next holes from the jump of the last round" at a
+/// disk ([`SolverSettings::arc_rounds`]; the carried start gives the first jump). On the 443 FTDCR v4 val rows, solved
+/// warm, tips against those of the rounds' fixed point (40 rounds): from the
+/// mirrored chords alone (before session 25) 2 rounds 32 um mean (max 0.34 mm), 3
+/// rounds 7.0 um (max 91 um); from the carried start 1 round 215 um (the
+/// extrapolation of unconverged corrections; 39 um from the last correction alone),
+/// 2 rounds 6.7 um (max 60 um), 3 rounds 0.66 um (max 5.3 um). The fixed point is 3.3
+/// um (max 25 um) from the condensed coupling: the arc's own error. A round is
+/// about a tenth of a warm row's instructions (`examples/tendon_profile`).
+pub(crate) const ARC_ROUNDS: usize = 3;
 
 /// `sin x / x`, `(1 - cos x) / x^2` and `(x - sin x) / x^3` of `x = sqrt(x2)`: series
 /// for `x2 <= 0.25` (truncation below 3e-11; no square root, so a dual at `x = 0` has
@@ -223,11 +234,31 @@ pub(super) fn guide_chords<T: Real>(
         y.m -= jm;
         return;
     }
-    // the chords on to the predicted next holes, summed in this disk's frame
+    // the chords on to the predicted next holes, summed in this disk's frame: the
+    // mirrored chords, corrected as the rounds of the guides just before corrected
+    // theirs (module docs)
     let (mut fl, mut ml) = (mat_t_vec(&y.rot, &gn), mat_t_vec(&y.rot, &gm));
+    let (fl_mirror, ml_mirror) = (fl, ml);
+    let carry = if buf.arc_corr_g.wrapping_add(1) == g {
+        plan.arc_carry[g]
+    } else {
+        0
+    };
+    let [(c1f, c1m), (c2f, c2m)] = buf.arc_corr;
+    match carry {
+        0 => {}
+        1 => {
+            fl += c1f;
+            ml += c1m;
+        }
+        _ => {
+            fl += c1f + c1f - c2f;
+            ml += c1m + c1m - c2m;
+        }
+    }
     let (jnl, jml) = (mat_t_vec(&y.rot, &jn), mat_t_vec(&y.rot, &jm));
     let (nl0, ml0) = (mat_t_vec(&y.rot, &y.n), mat_t_vec(&y.rot, &y.m));
-    for _ in 0..ARC_ITERATIONS {
+    for _ in 0..plan.arc_rounds {
         // the state after the jump as the last round left it
         let (nl, mlp) = (nl0 - jnl - fl, ml0 - jml - ml);
         fl = z;
@@ -253,6 +284,8 @@ pub(super) fn guide_chords<T: Real>(
             ml += f64_cross(&a.rho, &f);
         }
     }
+    buf.arc_corr = [(fl - fl_mirror, ml - ml_mirror), buf.arc_corr[0]];
+    buf.arc_corr_g = g;
     y.n -= jn + mat_vec(&y.rot, &fl);
     y.m -= jm + mat_vec(&y.rot, &ml);
 }
@@ -276,6 +309,63 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The rounds' carried start (module docs), on the shipped FTDCR v4 scene solved
+    /// warm from the servo readings of the 443 val rows: the tips with 2 rounds
+    /// from the carried start (the scene's `arc_rounds`) lie as close to the tips of
+    /// the rounds' fixed point (40 rounds from the mirrored chords, no carry) as those
+    /// of 3 rounds from the mirrored chords alone (the coupling before session 25),
+    /// by the mean and by the largest distance; 2 rounds from the mirrored chords lie
+    /// several times farther. Measured: mean / max 6.7 / 60 um carried, 7.0 / 91 um
+    /// 3 rounds mirrored, 32 / 336 um 2 rounds mirrored.
+    #[test]
+    fn two_rounds_from_the_carried_start_are_as_close_as_three_from_the_mirror() {
+        let scene = crate::Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+        let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").expect("shipped data");
+        let tips = |rounds: usize, carry: bool| {
+            let mut tw = scene.tendon_workspace().expect("workspace");
+            let plan = tw.workspace_mut().plan_mut();
+            assert!(plan.arc && plan.arc_carry.contains(&2));
+            plan.arc_rounds = rounds;
+            if !carry {
+                plan.arc_carry.iter_mut().for_each(|c| *c = 0);
+            }
+            let mut parser = scene.readings_parser(&tw);
+            let rows: Vec<_> = text
+                .lines()
+                .enumerate()
+                .filter_map(|(i, l)| parser.line(i + 1, l).ok().flatten())
+                .collect();
+            assert_eq!(rows.len(), 443);
+            rows.iter()
+                .map(|row| {
+                    let rep = tw.solve_readings(&row.readings_m).expect("row");
+                    assert!(rep.status.is_converged(), "{rounds} {carry}: {rep:?}");
+                    tw.tip_position()
+                })
+                .collect::<Vec<_>>()
+        };
+        let fixed = tips(40, false);
+        let from = |t: &[Vector3<f64>]| {
+            let d: Vec<f64> = t.iter().zip(&fixed).map(|(a, b)| (a - b).norm()).collect();
+            let mean = d.iter().sum::<f64>() / d.len() as f64;
+            (mean, d.iter().fold(0.0f64, |m, x| m.max(*x)))
+        };
+        let carried = from(&tips(2, true));
+        let (three, two) = (from(&tips(3, false)), from(&tips(2, false)));
+        let um = |(a, b): (f64, f64)| format!("{:.2} / {:.1} um", a * 1e6, b * 1e6);
+        println!(
+            "tips from the fixed point, mean / max: carried {}, 3 mirrored {}, 2 mirrored {}",
+            um(carried),
+            um(three),
+            um(two)
+        );
+        assert!(
+            carried.0 <= three.0 && carried.1 <= three.1,
+            "{carried:?} {three:?}"
+        );
+        assert!(two.0 > 3.0 * carried.0, "{two:?} {carried:?}");
     }
 
     /// A Kirchhoff gap under a pure bending moment (no force) is a circular arc:

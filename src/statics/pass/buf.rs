@@ -91,6 +91,11 @@ pub(crate) struct PassBuf<T: Real> {
     /// Arc coupling: the tension of each cable's chord on from the current disk (N),
     /// computed once per disk for the rounds of `arc::guide_chords`.
     pub(in crate::statics::pass) arc_t: Vec<T>,
+    /// Arc coupling: what the rounds of the last two guides of this pass changed of
+    /// their first guess (chords on, force and moment in each guide's frame), newest
+    /// first, and the guide of the newest (`usize::MAX`: none yet).
+    pub(in crate::statics::pass) arc_corr: [(Vector3<T>, Vector3<T>); 2],
+    pub(in crate::statics::pass) arc_corr_g: usize,
     pub rhs_evals: u64,
     /// Condensed coupling: segment re-integrations (local iterations) so far.
     pub retries: u64,
@@ -170,6 +175,8 @@ impl<T: Real> PassBuf<T> {
             lengths: vec![T::zero(); plan.cables.len()],
             lengths_ck: vec![T::zero(); plan.cables.len()],
             arc_t: vec![T::zero(); if plan.arc { plan.cables.len() } else { 0 }],
+            arc_corr: [(z, z); 2],
+            arc_corr_g: usize::MAX,
             rhs_evals: 0,
             retries: 0,
             local_tol: LOCAL_TOL,
