@@ -217,7 +217,8 @@ const FORWARD_MAX_CONTINUATION_STEPS: u8 = 3;
 pub const FORWARD_INPUT_BYTES: usize = 2 * 48 + 8;
 
 /// Bytes of a `forward_solve` input: a [`ForwardInput`], then one byte choosing the
-/// cable coupling (`numerics.cable_coupling`: condensed, arc, exact). The byte is past
+/// cable coupling (`numerics.cable_coupling`: condensed, arc, exact; byte mod 3) and
+/// the arc coupling's rounds (`numerics.arc_rounds`: 3, 1 or 2 by byte / 3 mod 3). The byte is past
 /// [`FORWARD_INPUT_BYTES`], so the inputs of the other targets that embed a
 /// `ForwardInput` keep their layout, and the corpora written before it (104 bytes,
 /// the extra byte read as zero) replay with the default coupling, as they ran.
@@ -292,11 +293,16 @@ impl ForwardInput {
     /// and the cable coupling.
     pub fn from_solve_bytes(data: &[u8]) -> Self {
         let mut input = Self::from_bytes(data);
-        input.settings.cable_coupling = match Reader::new(data, FORWARD_INPUT_BYTES).choice(3) {
+        let b = Reader::new(data, FORWARD_INPUT_BYTES).byte();
+        input.settings.cable_coupling = match b % 3 {
             0 => CableCoupling::Condensed,
             1 => CableCoupling::Arc,
             _ => CableCoupling::Exact,
         };
+        // the arc coupling's rounds (`numerics.arc_rounds`; read only under `arc`):
+        // from the same byte, so that the corpora written before it (bytes 0-2) keep
+        // their coupling and the default 3 rounds
+        input.settings.arc_rounds = [3, 1, 2][usize::from(b / 3 % 3)];
         input
     }
 

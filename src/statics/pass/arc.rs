@@ -29,7 +29,8 @@
 //! of its chord back through the disk's plane (exact on a circular arc of equal
 //! gaps), corrected by what the rounds changed at the disks just before: the last
 //! disk's correction (force and moment in the disk's frame), or its linear
-//! extrapolation `2 c_1 - c_2` from the last two, when those disks send their chords
+//! extrapolation `2 c_1 - c_2` from the last two (with two rounds or more), when
+//! those disks send their chords
 //! on along the same cables (`Plan::arc_carry`; along a segment the curvature
 //! changes smoothly from disk to disk, so the corrections do too). A fixed count
 //! and a start computed within the same pass, so the pass stays an explicit, smooth
@@ -51,14 +52,16 @@ use crate::statics::plan::Plan;
 use nalgebra::{Matrix3, Vector3};
 
 /// Default rounds of "predict the next holes from the jump of the last round" at a
-/// disk ([`SolverSettings::arc_rounds`]; the carried start gives the first jump). On the 443 FTDCR v4 val rows, solved
-/// warm, tips against those of the rounds' fixed point (40 rounds): from the
-/// mirrored chords alone (before session 25) 2 rounds 32 um mean (max 0.34 mm), 3
-/// rounds 7.0 um (max 91 um); from the carried start 1 round 215 um (the
-/// extrapolation of unconverged corrections; 39 um from the last correction alone),
-/// 2 rounds 6.7 um (max 60 um), 3 rounds 0.66 um (max 5.3 um). The fixed point is 3.3
-/// um (max 25 um) from the condensed coupling: the arc's own error. A round is
-/// about a tenth of a warm row's instructions (`examples/tendon_profile`).
+/// disk ([`SolverSettings::arc_rounds`]; the carried start gives the first jump). On
+/// the 443 FTDCR v4 val rows, solved warm, tips against those of the rounds' fixed
+/// point (40 rounds): from the mirrored chords alone (before session 25) 2 rounds 32
+/// um mean (max 0.34 mm), 3 rounds 7.0 um (max 91 um); from the carried start 1
+/// round 39 um (max 0.27 mm; the last correction alone: extrapolating one round's
+/// unconverged corrections gave 215 um), 2 rounds 6.7 um (max 60 um), 3 rounds 0.66
+/// um (max 5.3 um). The fixed point is 3.3 um (max 25 um) from the condensed
+/// coupling: the arc's own error. Callgrind instructions of those warm rows
+/// (`examples/tendon_profile`): 3 rounds mirrored 0.932e9, carried 2 rounds 0.836e9,
+/// 1 round 0.693e9.
 pub(crate) const ARC_ROUNDS: usize = 3;
 
 /// `sin x / x`, `(1 - cos x) / x^2` and `(x - sin x) / x^3` of `x = sqrt(x2)`: series
@@ -240,7 +243,9 @@ pub(super) fn guide_chords<T: Real>(
     let (mut fl, mut ml) = (mat_t_vec(&y.rot, &gn), mat_t_vec(&y.rot, &gm));
     let (fl_mirror, ml_mirror) = (fl, ml);
     let carry = if buf.arc_corr_g.wrapping_add(1) == g {
-        plan.arc_carry[g]
+        // (one round leaves its corrections far from converged: extrapolated, their
+        // error grows; module docs)
+        plan.arc_carry[g].min(if plan.arc_rounds >= 2 { 2 } else { 1 })
     } else {
         0
     };
@@ -317,8 +322,9 @@ mod tests {
     /// the rounds' fixed point (40 rounds from the mirrored chords, no carry) as those
     /// of 3 rounds from the mirrored chords alone (the coupling before session 25),
     /// by the mean and by the largest distance; 2 rounds from the mirrored chords lie
-    /// several times farther. Measured: mean / max 6.7 / 60 um carried, 7.0 / 91 um
-    /// 3 rounds mirrored, 32 / 336 um 2 rounds mirrored.
+    /// several times farther. One round from the carried start converges on every row
+    /// within 0.1 mm on average. Measured: mean / max 6.7 / 60 um carried, 7.0 / 91 um
+    /// 3 rounds mirrored, 32 / 336 um 2 rounds mirrored, 39 / 270 um 1 round carried.
     #[test]
     fn two_rounds_from_the_carried_start_are_as_close_as_three_from_the_mirror() {
         let scene = crate::Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
@@ -354,18 +360,24 @@ mod tests {
         };
         let carried = from(&tips(2, true));
         let (three, two) = (from(&tips(3, false)), from(&tips(2, false)));
+        let one = from(&tips(1, true));
         let um = |(a, b): (f64, f64)| format!("{:.2} / {:.1} um", a * 1e6, b * 1e6);
         println!(
-            "tips from the fixed point, mean / max: carried {}, 3 mirrored {}, 2 mirrored {}",
+            "tips from the fixed point, mean / max: carried {}, 3 mirrored {}, 2 mirrored {}, \
+             1 carried {}",
             um(carried),
             um(three),
-            um(two)
+            um(two),
+            um(one)
         );
         assert!(
             carried.0 <= three.0 && carried.1 <= three.1,
             "{carried:?} {three:?}"
         );
         assert!(two.0 > 3.0 * carried.0, "{two:?} {carried:?}");
+        // one round (its correction carried, not extrapolated): every row converges
+        // (asserted in `tips`), within 0.1 mm on average
+        assert!(one.0 < 1e-4, "{one:?}");
     }
 
     /// A Kirchhoff gap under a pure bending moment (no force) is a circular arc:
