@@ -25,6 +25,7 @@
 //!
 //! The scene's coupling is `numerics.cable_coupling = "arc"` since session 20 (the
 //! next holes predicted by an arc of the gap, not solved for: `statics/pass/arc.rs`,
+//! two rounds a disk since session 25, `numerics.arc_rounds = 2`;
 //! `tests/arc_coupling.rs`); before, it was the default `condensed`.
 //!
 //! * `tendon_readings_warm_loose`: the warm rows at a control loop's tolerances
