@@ -218,8 +218,8 @@ pub const FORWARD_INPUT_BYTES: usize = 2 * 48 + 8;
 
 /// Bytes of a `forward_solve` input: a [`ForwardInput`], then one byte choosing the
 /// cable coupling (`numerics.cable_coupling`: condensed, arc, exact; byte mod 3) and
-/// the arc coupling's rounds (`numerics.arc_rounds`: 3, 1 or 2 by byte / 3 mod 3). The byte is past
-/// [`FORWARD_INPUT_BYTES`], so the inputs of the other targets that embed a
+/// the arc coupling's rounds (`numerics.arc_rounds`: 3, 1 or 2 by byte / 3 mod 3).
+/// The byte is past [`FORWARD_INPUT_BYTES`], so the inputs of the other targets that embed a
 /// `ForwardInput` keep their layout, and the corpora written before it (104 bytes,
 /// the extra byte read as zero) replay with the default coupling, as they ran.
 pub const FORWARD_SOLVE_BYTES: usize = FORWARD_INPUT_BYTES + 1;

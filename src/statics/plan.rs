@@ -163,7 +163,9 @@ pub(crate) struct Plan {
     pub arc_chords: Vec<Vec<ArcChord>>,
     /// Arc coupling, per guide: how many of the guides just before it (0, 1 or 2)
     /// send their chords on along the same cables in the same order, so that their
-    /// rounds' corrections start this guide's rounds (`statics::pass::arc`).
+    /// rounds' corrections start this guide's rounds (`statics::pass::arc`); at most 1
+    /// with a single round (one round's corrections are far from converged, and
+    /// extrapolated their error grows).
     pub arc_carry: Vec<u8>,
     /// Arc coupling: rounds of the next-hole prediction at a disk
     /// ([`SolverSettings::arc_rounds`]).
@@ -411,13 +413,14 @@ impl Plan {
         let same_cables = |a: &[ArcChord], b: &[ArcChord]| {
             !a.is_empty() && a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.cable == y.cable)
         };
+        let depth = if settings.arc_rounds >= 2 { 2 } else { 1 };
         let arc_carry: Vec<u8> = (0..arc_chords.len())
             .map(|g| match g {
                 0 => 0,
                 _ if !same_cables(&arc_chords[g], &arc_chords[g - 1]) => 0,
                 1 => 1,
                 _ if !same_cables(&arc_chords[g - 1], &arc_chords[g - 2]) => 1,
-                _ => 2,
+                _ => depth,
             })
             .collect();
         let ei = robot.sections()[0].stiffness.bend_twist.x;

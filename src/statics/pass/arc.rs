@@ -25,16 +25,16 @@
 //! `t d/|d|` along `d = tau + E rho' - rho` in this disk's frame, rotated to the world
 //! by `R` (the moment `R (rho x f)` likewise). The state after the jump (`n+`,
 //! `m+`) depends on these forces, so the prediction and the jump are iterated
-//! [`SolverSettings::arc_rounds`] times (rounds; default [`ARC_ROUNDS`]), starting from each chord on as the mirror image
-//! of its chord back through the disk's plane (exact on a circular arc of equal
-//! gaps), corrected by what the rounds changed at the disks just before: the last
-//! disk's correction (force and moment in the disk's frame), or its linear
-//! extrapolation `2 c_1 - c_2` from the last two (with two rounds or more), when
-//! those disks send their chords
-//! on along the same cables (`Plan::arc_carry`; along a segment the curvature
-//! changes smoothly from disk to disk, so the corrections do too). A fixed count
-//! and a start computed within the same pass, so the pass stays an explicit, smooth
-//! function of the unknowns and dual passes give its exact derivatives.
+//! [`SolverSettings::arc_rounds`] times (rounds; default [`ARC_ROUNDS`]). They start
+//! from each chord on as the mirror image of its chord back through the disk's plane
+//! (exact on a circular arc of equal gaps), corrected by what the rounds changed at
+//! the disks just before: the last disk's correction (force and moment in the disk's
+//! frame), or its linear extrapolation `2 c_1 - c_2` from the last two (with two
+//! rounds or more), when those disks send their chords on along the same cables
+//! (`Plan::arc_carry`; along a segment the curvature changes smoothly from disk to
+//! disk, so the corrections do too). A fixed count and a start computed within the
+//! same pass, so the pass stays an explicit, smooth function of the unknowns and dual
+//! passes give its exact derivatives.
 //!
 //! What it neglects: the moment's terms beyond second order in `s` (a hole error of
 //! about `h theta^4` for a gap bending by `theta`), the distributed load on the gap,
@@ -243,9 +243,7 @@ pub(super) fn guide_chords<T: Real>(
     let (mut fl, mut ml) = (mat_t_vec(&y.rot, &gn), mat_t_vec(&y.rot, &gm));
     let (fl_mirror, ml_mirror) = (fl, ml);
     let carry = if buf.arc_corr_g.wrapping_add(1) == g {
-        // (one round leaves its corrections far from converged: extrapolated, their
-        // error grows; module docs)
-        plan.arc_carry[g].min(if plan.arc_rounds >= 2 { 2 } else { 1 })
+        plan.arc_carry[g]
     } else {
         0
     };
@@ -330,10 +328,15 @@ mod tests {
         let scene = crate::Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
         let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").expect("shipped data");
         let tips = |rounds: usize, carry: bool| {
+            let mut scene = scene.clone();
+            scene.numerics.arc_rounds = rounds;
             let mut tw = scene.tendon_workspace().expect("workspace");
             let plan = tw.workspace_mut().plan_mut();
-            assert!(plan.arc && plan.arc_carry.contains(&2));
-            plan.arc_rounds = rounds;
+            assert!(plan.arc && plan.arc_rounds == rounds);
+            assert_eq!(
+                plan.arc_carry.iter().max(),
+                Some(&if rounds >= 2 { 2 } else { 1 })
+            );
             if !carry {
                 plan.arc_carry.iter_mut().for_each(|c| *c = 0);
             }
