@@ -3,6 +3,7 @@
 
 use crate::error::ModelError;
 use crate::robot::Robot;
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Frame a point load's components are expressed in.
@@ -114,7 +115,57 @@ impl Loads {
             ModelError::non_negative(format!("loads.tensions_n[{j}]"), self.tensions_n[j])?;
         }
         self.check_tensions(robot)?;
+        self.check_point_forces(robot)?;
         self.check_weight(robot)
+    }
+
+    /// A point force must stay below the axial stiffness `EA` of every section
+    /// between the base and the section it acts on (each carries it): a force of `EA`
+    /// along the axis is an axial strain of magnitude 1 (pressed to zero length, or
+    /// stretched to twice its length), as for the tensions and the weight. Before
+    /// (session 26), a tip force of this size was valid input and ended in a
+    /// non-convergence status without a reason. Allocation-free when it passes.
+    fn check_point_forces(&self, robot: &Robot) -> Result<(), ModelError> {
+        let sections = robot.sections();
+        for (i, p) in self.point.iter().enumerate() {
+            // |F| without overflowing for components near the range of f64
+            let v = Vector3::from(p.force_n);
+            let big = v.amax();
+            let f = if big > 0.0 {
+                big * (v / big).norm()
+            } else {
+                0.0
+            };
+            let Some((k, sec)) = sections
+                .iter()
+                .enumerate()
+                .take(p.section + 1)
+                .min_by(|a, b| {
+                    a.1.stiffness
+                        .shear_stretch
+                        .z
+                        .total_cmp(&b.1.stiffness.shear_stretch.z)
+                })
+            else {
+                continue;
+            };
+            let ea = sec.stiffness.shear_stretch.z;
+            if f < ea {
+                continue;
+            }
+            return Err(ModelError::OutOfRange {
+                field: format!("loads.point[{i}].force_n"),
+                value: f,
+                why: format!(
+                    "its magnitude reaches the axial stiffness EA = {} N of section {k}, \
+                     which carries it: along the axis an axial strain of magnitude 1 or \
+                     beyond (the rod pressed to zero length, or stretched to twice its \
+                     length), not a physical state",
+                    crate::error::Num(ea)
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// The cable tensions each section carries (every cable that ends in it or beyond

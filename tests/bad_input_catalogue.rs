@@ -454,20 +454,32 @@ fn scene_same_unknown_twice_names_both_unknowns() {
 
 /// Found by audit 23: a point force of 1e300 N overflowed the residual's round-off
 /// floor to infinity, and the solve reported `Converged` (exit 0) at a residual of
-/// 8.3e300 with the unloaded shape; now `NonFinite`, exit 1.
+/// 8.3e300 with the unloaded shape; then `NonFinite`, exit 1. Since session 26 a
+/// point force that reaches the axial stiffness EA of a section carrying it (an
+/// axial strain of magnitude 1) is refused, naming the field, as tensions and weights
+/// are: 1e300 N, and 2e5 N on the demo's 1.56 mm rod (EA 1.2e5 N).
 #[test]
-fn scene_load_beyond_f64_range_is_not_converged() {
-    let r = solve_scene(
-        "f300",
-        "s.toml",
-        &scene_with(
-            DEMO,
-            "section = 1\nmass_kg = 0.02",
-            "section = 1\nforce_n = [1e300, 0, 0]",
-        ),
-    );
-    assert_eq!(r.code, 1, "stdout {} stderr {}", r.stdout, r.stderr);
-    assert!(r.stdout.contains("status: NonFinite"), "{}", r.stdout);
+fn scene_point_force_beyond_the_axial_stiffness_names_the_force() {
+    for (tag, force, value) in [("f300", "1e300", "1e300"), ("f2e5", "2e5", "200000")] {
+        let r = solve_scene(
+            tag,
+            "s.toml",
+            &scene_with(
+                DEMO,
+                "section = 1\nmass_kg = 0.02",
+                &format!("section = 1\nforce_n = [0, {force}, 0]"),
+            ),
+        );
+        assert_error(
+            &r,
+            &[
+                &format!("loads.point[0].force_n = {value}"),
+                "axial stiffness EA",
+                "section 0",
+            ],
+        );
+        assert!(!r.stdout.contains("Converged"), "{}", r.stdout);
+    }
 }
 
 /// Found by audit 23: a seventh tension for six cables was reported as
@@ -507,8 +519,10 @@ fn tendon_reference_failure_names_the_reference_not_only_the_pretension() {
     );
 }
 
-/// A load the solver cannot reach (a 15 kN cable pull on the 1.56 mm demo rod):
-/// `solve` reports a failure status and exits 1; nothing claims convergence.
+/// A load the solver cannot reach (a 15 kN cable pull on the 1.56 mm demo rod, below
+/// its EA): `solve` reports a failure status and exits 1; nothing claims convergence,
+/// and stderr says why in the scene's terms (`Workspace::diagnose`): the tension
+/// named first with its value, the loads blamed (session 26; before, no reason).
 #[test]
 fn scene_unreachable_load_reports_a_failure_status() {
     let r = solve_scene(
@@ -535,6 +549,13 @@ fn scene_unreachable_load_reports_a_failure_status() {
         .any(|s| status.contains(s)),
         "{status}"
     );
+    for part in [
+        "error: not converged",
+        "largest: loads.tensions_n[0] = 15000 N",
+        "reduce loads.tensions_n[0]",
+    ] {
+        assert!(r.stderr.contains(part), "no `{part}` in:\n{}", r.stderr);
+    }
 }
 
 // ---------------------------------------------------------------------------------

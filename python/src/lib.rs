@@ -244,11 +244,27 @@ fn to_snake(s: &str) -> String {
 #[pyfunction]
 fn solve<'py>(py: Python<'py>, scene: &Scene) -> PyResult<Bound<'py, PyDict>> {
     let mut ws = workspace(py, &scene.inner)?;
-    let sol = py.detach(move || {
+    let (sol, why) = py.detach(move || {
         ws.solve(Start::Cold);
-        ws.solution()
+        (ws.solution(), diagnosis(&ws))
     });
-    solution_dict(py, &sol)
+    with_diagnosis(solution_dict(py, &sol)?, why)
+}
+
+/// Why a solve that did not converge ended where it did, in the scene's terms
+/// (`Workspace::diagnose`); `None` after a converged solve.
+fn diagnosis(ws: &Workspace) -> Option<String> {
+    (!ws.report().status.is_converged()).then(|| ws.diagnose().to_string())
+}
+
+/// `report["diagnosis"]` of a solution dict, when there is one.
+fn with_diagnosis<'py>(d: Bound<'py, PyDict>, why: Option<String>) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(why) = why {
+        if let Some(rep) = d.get_item("report")? {
+            rep.set_item("diagnosis", why)?;
+        }
+    }
+    Ok(d)
 }
 
 /// A solver that keeps its workspace: repeated solves start warm.
@@ -277,12 +293,12 @@ impl Solver {
             Start::Cold
         };
         let ws = &mut self.ws;
-        let sol = py.detach(|| {
+        let (sol, why) = py.detach(|| {
             ws.solve(start);
-            ws.solution()
+            (ws.solution(), diagnosis(ws))
         });
         self.solved = sol.report.status.is_converged();
-        solution_dict(py, &sol)
+        with_diagnosis(solution_dict(py, &sol)?, why)
     }
 }
 

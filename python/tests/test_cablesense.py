@@ -39,6 +39,17 @@ def test_solve_returns_arrays():
     assert sol["cable_lengths"].shape == (6,) and np.all(sol["cable_lengths"] > 0.1)
 
 
+def test_unreachable_load_is_diagnosed():
+    # 500 N on the demo's first cable: valid (below the rod's EA), not reachable
+    text = DEMO.read_text().replace("tensions_n = [1.5,", "tensions_n = [500.0,", 1)
+    sol = cablesense.solve(cablesense.Scene.from_toml(text))
+    assert not sol["report"]["converged"]
+    why = sol["report"]["diagnosis"]
+    assert "loads.tensions_n[0] = 500 N" in why and "reduce" in why
+    ok = cablesense.solve(cablesense.Scene.from_file(DEMO))
+    assert "diagnosis" not in ok["report"]
+
+
 def test_warm_solver_matches_cold_solve():
     scene = cablesense.Scene.from_file(TRACK)
     cold = cablesense.solve(scene)

@@ -27,6 +27,27 @@ use crate::loads::Loads;
 use crate::robot::Robot;
 use nalgebra::Vector3;
 
+/// Where a term of the intensity comes from (`intensity_terms`): what a diagnosis
+/// names, with the scene field a user would change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum IntensitySource {
+    /// The weight of section `k`'s rod (`robot.sections[k].density_kg_m3` under gravity).
+    RodWeight { section: usize },
+    /// The weight of section `k`'s guide disks (`robot.sections[k].guides.mass_kg`).
+    GuideWeight { section: usize },
+    /// Point load `i`'s force (`loads.point[i].force_n`).
+    Force { point: usize },
+    /// Point load `i`'s weight (`loads.point[i].mass_kg`).
+    Mass { point: usize },
+    /// Point load `i`'s torque (`loads.point[i].torque_nm`).
+    Torque { point: usize },
+    /// The net moment of the cables ending in section `k`; `cable` is the one with the
+    /// largest tension among them (`loads.tensions_n[cable]`).
+    Cables { section: usize, cable: usize },
+    /// Load parameter `k` of the workspace (an estimator's unknown load).
+    Param { index: usize },
+}
+
 /// Intensity (dimensionless) of `loads` plus the load parameters `theta` at `params`
 /// (a parameter's magnitude is added to its site's, an upper bound).
 pub(crate) fn load_intensity(
@@ -35,30 +56,56 @@ pub(crate) fn load_intensity(
     params: &[ParamSite],
     theta: &[f64],
 ) -> f64 {
-    let ei = robot.min_bending_stiffness();
+    let mut sum = 0.0;
+    let ei = intensity_terms(robot, loads, params, theta, &mut |_, t| sum += t);
     if ei.is_nan() || ei <= 0.0 {
         return f64::INFINITY;
     }
+    if sum.is_finite() {
+        sum / ei
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Every term of [`load_intensity`] before the division by `EI_min`, handed to
+/// `visit` with its source (terms of zero included, in a fixed order); returns
+/// `EI_min` (N m^2). No allocation: [`load_intensity`] runs at every evaluation of a
+/// control loop.
+pub(crate) fn intensity_terms(
+    robot: &Robot,
+    loads: &Loads,
+    params: &[ParamSite],
+    theta: &[f64],
+    visit: &mut dyn FnMut(IntensitySource, f64),
+) -> f64 {
+    let ei = robot.min_bending_stiffness();
     let g = Vector3::from(loads.gravity_m_s2).norm();
     let end = |section: usize| robot.sections().get(section).map_or(0.0, |s| s.end());
     // weight of the bare rod, section by section: int rho A g s^2 ds
-    let mut sum: f64 = robot
-        .sections()
-        .iter()
-        .map(|s| {
-            let (a, b) = (s.start, s.end());
-            s.stiffness.linear_density * g * (b.powi(3) - a.powi(3)) / 3.0
-        })
-        .sum();
-    sum += robot
-        .guides()
-        .iter()
-        .map(|d| d.mass * g * d.s * d.s)
-        .sum::<f64>();
-    for p in &loads.point {
+    for (k, s) in robot.sections().iter().enumerate() {
+        let (a, b) = (s.start, s.end());
+        let w = s.stiffness.linear_density * g * (b.powi(3) - a.powi(3)) / 3.0;
+        visit(IntensitySource::RodWeight { section: k }, w);
+    }
+    for (k, s) in robot.sections().iter().enumerate() {
+        let w: f64 = robot.guides()[s.guides.clone()]
+            .iter()
+            .map(|d| d.mass * g * d.s * d.s)
+            .sum();
+        visit(IntensitySource::GuideWeight { section: k }, w);
+    }
+    for (i, p) in loads.point.iter().enumerate() {
         let s = end(p.section);
-        let f = Vector3::from(p.force_n).norm() + p.mass_kg * g;
-        sum += f * s * s + Vector3::from(p.torque_nm).norm() * s;
+        visit(
+            IntensitySource::Force { point: i },
+            Vector3::from(p.force_n).norm() * s * s,
+        );
+        visit(IntensitySource::Mass { point: i }, p.mass_kg * g * s * s);
+        visit(
+            IntensitySource::Torque { point: i },
+            Vector3::from(p.torque_nm).norm() * s,
+        );
     }
     // cable tension: the scene's plus its parameters'
     let tension = |j: usize| -> f64 {
@@ -73,6 +120,7 @@ pub(crate) fn load_intensity(
     for k in 0..robot.sections().len() {
         let mut moment = Vector3::zeros();
         let mut s_end = 0.0;
+        let (mut largest, mut t_max) = (None, f64::NEG_INFINITY);
         for (j, c) in robot.cables().iter().enumerate() {
             if c.end_section != k {
                 continue;
@@ -87,22 +135,28 @@ pub(crate) fn load_intensity(
                 continue;
             };
             s_end = c.end_s;
-            moment += Vector3::z().cross(&d) * tension(j);
+            let t = tension(j);
+            moment += Vector3::z().cross(&d) * t;
+            if t > t_max {
+                (largest, t_max) = (Some(j), t);
+            }
         }
-        sum += moment.norm() * s_end;
+        if let Some(cable) = largest {
+            visit(
+                IntensitySource::Cables { section: k, cable },
+                moment.norm() * s_end,
+            );
+        }
     }
-    for (site, th) in params.iter().zip(theta) {
+    for (index, (site, th)) in params.iter().zip(theta).enumerate() {
         let s = |point: usize| loads.point.get(point).map_or(0.0, |p| end(p.section));
-        sum += match *site {
+        let term = match *site {
             ParamSite::Force { point, .. } => th.abs() * s(point).powi(2),
             ParamSite::Torque { point, .. } => th.abs() * s(point),
             ParamSite::Mass { point } => th.abs() * g * s(point).powi(2),
             ParamSite::Tension { .. } => 0.0,
         };
+        visit(IntensitySource::Param { index }, term);
     }
-    if sum.is_finite() {
-        sum / ei
-    } else {
-        f64::INFINITY
-    }
+    ei
 }

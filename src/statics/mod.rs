@@ -7,6 +7,7 @@
 //! numbers, a backtracking line search, warm starts and load continuation.
 
 mod continuous;
+mod diagnosis;
 mod floor;
 mod intensity;
 mod multiple;
@@ -14,6 +15,7 @@ mod pass;
 mod plan;
 mod workspace;
 
+pub use diagnosis::{diagnose, Diagnosis, LoadShare, LOADS_BLAMED_ABOVE};
 pub use pass::{Pose, Sample};
 pub(crate) use pass::{ARC_ROUNDS, LOCAL_TOL};
 pub use plan::ParamSite;

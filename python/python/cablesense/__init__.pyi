@@ -47,7 +47,9 @@ class Scene:
 #   s (n,) m; r (n, 3) m; R (n, 3, 3) rotations; tip (3,) m; section_tips (k, 3) m;
 #   cable_lengths (c,) m from the base plate;
 #   report: {status, converged, iterations, residual, rhs_evals, jacobian_evals,
-#            continuation_steps}
+#            continuation_steps[, diagnosis]}; `diagnosis` (str) only when not
+#            converged: why, with the loads that bend the rod most named by their
+#            scene field (`Workspace::diagnose`)
 Solution = Dict[str, Any]
 
 def solve(scene: Scene) -> Solution:

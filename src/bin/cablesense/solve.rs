@@ -396,6 +396,9 @@ fn solve_rod(
             out["model"] = serde_json::json!(label);
             out["auto"] = serde_json::json!(choice);
         }
+        if !report.status.is_converged() {
+            out["diagnosis"] = serde_json::json!(ws.diagnose());
+        }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         match &label {
@@ -467,6 +470,10 @@ fn solve_rod(
             sol.base_moment.y,
             sol.base_moment.z
         );
+    }
+    if !report.status.is_converged() {
+        // why, in the scene's terms (the shape above is the best iterate)
+        eprintln!("error: {}", ws.diagnose());
     }
     Ok(if report.status.is_converged() {
         ExitCode::SUCCESS
