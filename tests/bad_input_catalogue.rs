@@ -759,6 +759,32 @@ fn readings_pull_beyond_the_tendon_names_tendon_and_value() {
     assert_good_row(&rows, 3);
 }
 
+/// A pull no equilibrium reaches (80 mm on `s1a`: 10 rad of bend at its 8 mm hole
+/// radius) is valid input but does not converge: the row says why, naming the
+/// readings column and the bend it asks for (`TendonWorkspace::diagnose`; before
+/// session 26 a bare `stalled`), and the stream goes on.
+#[test]
+fn readings_unreachable_pull_is_diagnosed_by_column() {
+    let (_, rows) = readings_rows(&format!(
+        "{RD_HEADER}0,0,0,0,0,0,0\n0.1,0.08,0,0,0,0,0\n0.2,0.001,0,0,0,0,0\n"
+    ));
+    let row = rows
+        .iter()
+        .find(|r| r["line"] == 3)
+        .unwrap_or_else(|| panic!("no output for line 3: {rows:?}"));
+    assert_ne!(row["status"], "converged", "{row}");
+    let why = row["diagnosis"].as_str().unwrap_or_else(|| panic!("{row}"));
+    for part in [
+        "the readings pull in: readings column s1a = 80 mm (at a 8 mm hole radius) 10.000 rad",
+        "reduce readings column s1a",
+    ] {
+        assert!(why.contains(part), "no `{part}` in {why}");
+    }
+    assert_good_row(&rows, 4);
+    // a converged row carries none
+    assert!(rows[0].get("diagnosis").is_none(), "{}", rows[0]);
+}
+
 #[test]
 fn readings_header_without_tendon_column_names_the_expected_columns() {
     let (_, rows) = readings_rows(&format!("foo,bar\n1,2\n{RD_HEADER}0,0,0,0,0,0,0\n"));

@@ -120,6 +120,17 @@ size_t cs_model_cable_count(const struct CsModel *m);
 // `m` is a live handle; `info` is null or writable.
 enum CsCode cs_model_solve(struct CsModel *m, int32_t warm, struct CsSolveInfo *info);
 
+// Why the last solve ended as it did (`Workspace::diagnose`: the load intensity
+// split by the load that causes it, each named by its scene field, and what to
+// change), as text in `buf` (`len` bytes, NUL-terminated, cut to fit); `*needed`
+// (unless null) gets the bytes the whole text takes. Meant for a solve whose
+// status is not 0. Allocates.
+//
+// # Safety
+// `m` is a live handle; `buf` is null or holds `len` writable bytes; `needed` is
+// null or writable.
+enum CsCode cs_model_diagnosis(const struct CsModel *m, char *buf, size_t len, size_t *needed);
+
 // Tip position `[3]` (m) and rotation `[9]` (column-major) of the last solve.
 // Allocates (recomputes the shape).
 //
@@ -247,6 +258,17 @@ enum CsCode cs_tendons_solve(struct CsTendons *t,
                              size_t n,
                              int32_t warm,
                              struct CsTendonInfo *info);
+
+// Why the last solve from readings ended as it did
+// (`TendonWorkspace::diagnose`: as [`cs_model_diagnosis`], with each pulled-in
+// tendon named by its readings column and the bend its pull asks for), as text in
+// `buf` (`len` bytes, NUL-terminated, cut to fit); `*needed` (unless null) gets the
+// bytes the whole text takes. Meant for a solve whose status is not 0. Allocates.
+//
+// # Safety
+// `t` is a live handle; `buf` is null or holds `len` writable bytes; `needed` is
+// null or writable.
+enum CsCode cs_tendons_diagnosis(const struct CsTendons *t, char *buf, size_t len, size_t *needed);
 
 // Tensions `tensions[n]` (N) and, unless null, taut flags `taut[n]` (1 taut, 0
 // slack) of the driven tendons at the last solve, `n` = [`cs_tendons_count`]. No

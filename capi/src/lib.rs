@@ -282,6 +282,50 @@ pub unsafe extern "C" fn cs_model_solve(
     })
 }
 
+/// Copy `msg` into `buf` (`len` bytes, NUL-terminated, cut at `len - 1` bytes; a
+/// null `buf` or `len` 0 writes nothing) and set `*needed` (unless null) to the
+/// bytes the whole message takes with its NUL.
+fn write_message(msg: &str, buf: *mut c_char, len: usize, needed: *mut usize) {
+    // SAFETY (callers): `buf` is null or holds `len` writable bytes; `needed` is
+    // null or writable.
+    if let Some(n) = unsafe { needed.as_mut() } {
+        *n = msg.len() + 1;
+    }
+    if buf.is_null() || len == 0 {
+        return;
+    }
+    let k = msg.len().min(len - 1);
+    // SAFETY: `k + 1 <= len` bytes, per the callers' contract.
+    unsafe {
+        std::ptr::copy_nonoverlapping(msg.as_ptr().cast::<c_char>(), buf, k);
+        *buf.add(k) = 0;
+    }
+}
+
+/// Why the last solve ended as it did (`Workspace::diagnose`: the load intensity
+/// split by the load that causes it, each named by its scene field, and what to
+/// change), as text in `buf` (`len` bytes, NUL-terminated, cut to fit); `*needed`
+/// (unless null) gets the bytes the whole text takes. Meant for a solve whose
+/// status is not 0. Allocates.
+///
+/// # Safety
+/// `m` is a live handle; `buf` is null or holds `len` writable bytes; `needed` is
+/// null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cs_model_diagnosis(
+    m: *const CsModel,
+    buf: *mut c_char,
+    len: usize,
+    needed: *mut usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let m = unsafe { m.as_ref() }.ok_or_else(|| bad("model is null"))?;
+        write_message(&m.ws.diagnose().to_string(), buf, len, needed);
+        Ok(())
+    })
+}
+
 /// Tip position `[3]` (m) and rotation `[9]` (column-major) of the last solve.
 /// Allocates (recomputes the shape).
 ///
@@ -694,6 +738,30 @@ pub unsafe extern "C" fn cs_tendons_solve(
                 residual_m: r.residual_m,
             };
         }
+        Ok(())
+    })
+}
+
+/// Why the last solve from readings ended as it did
+/// (`TendonWorkspace::diagnose`: as [`cs_model_diagnosis`], with each pulled-in
+/// tendon named by its readings column and the bend its pull asks for), as text in
+/// `buf` (`len` bytes, NUL-terminated, cut to fit); `*needed` (unless null) gets the
+/// bytes the whole text takes. Meant for a solve whose status is not 0. Allocates.
+///
+/// # Safety
+/// `t` is a live handle; `buf` is null or holds `len` writable bytes; `needed` is
+/// null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_diagnosis(
+    t: *const CsTendons,
+    buf: *mut c_char,
+    len: usize,
+    needed: *mut usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_ref() }.ok_or_else(|| bad("tendons is null"))?;
+        write_message(&h.ws.diagnose().to_string(), buf, len, needed);
         Ok(())
     })
 }

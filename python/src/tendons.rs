@@ -19,6 +19,8 @@ struct Row {
     taut: Vec<bool>,
     lengths: Vec<f64>,
     report: TendonReport,
+    /// Why the row did not converge (`TendonWorkspace::diagnose`); `None` if it did.
+    diagnosis: Option<String>,
 }
 
 impl Row {
@@ -36,6 +38,7 @@ impl Row {
             taut: ws.taut().to_vec(),
             lengths: ws.lengths().to_vec(),
             report,
+            diagnosis: (!report.status.is_converged()).then(|| ws.diagnose().to_string()),
         }
     }
 }
@@ -62,7 +65,11 @@ fn row_dict<'py>(py: Python<'py>, row: &Row) -> PyResult<Bound<'py, PyDict>> {
     d.set_item("tensions", PyArray1::from_slice(py, &row.tensions))?;
     d.set_item("taut", PyArray1::from_slice(py, &row.taut))?;
     d.set_item("lengths", PyArray1::from_slice(py, &row.lengths))?;
-    d.set_item("report", report_dict(py, &row.report)?)?;
+    let report = report_dict(py, &row.report)?;
+    if let Some(why) = &row.diagnosis {
+        report.set_item("diagnosis", why)?;
+    }
+    d.set_item("report", report)?;
     Ok(d)
 }
 

@@ -163,6 +163,16 @@ def test_readings_round_trip():
     assert np.allclose(cold["tip"], row["tip"], atol=1e-8)
 
 
+def test_unreachable_pull_is_diagnosed():
+    # 80 mm on s1a asks for 10 rad of bend at its 8 mm hole radius: no equilibrium
+    ts = cablesense.TendonSolver(cablesense.Scene.from_file(TDCR))
+    assert ts.solve(np.zeros(6))["report"]["converged"]
+    row = ts.solve(np.array([0.08, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    assert not row["report"]["converged"]
+    why = row["report"]["diagnosis"]
+    assert "readings column s1a = 80 mm" in why and "reduce readings column s1a" in why
+
+
 def test_scene_tendon_settings():
     # [numerics.tendons] sets the tendon iteration of every solver built from the
     # scene; a looser tolerance moves the tip by far less than a micrometre here

@@ -47,14 +47,20 @@ pub struct LoadShare {
 pub struct Diagnosis {
     /// How the solve ended.
     pub status: SolveStatus,
-    /// The solve's residual (scaled, as [`SolveReport::residual`]).
+    /// The solve's residual (scaled, as [`SolveReport::residual`]; for a solve from
+    /// readings `TendonReport::residual_m`, in m).
     pub residual: f64,
-    /// The solve's tolerance ([`SolveReport::tolerance`]).
+    /// The solve's tolerance, in the residual's units.
     pub tolerance: f64,
     /// The loads' intensity (rad, summed over the loads).
     pub intensity: f64,
     /// The loads with a share, largest first.
     pub loads: Vec<LoadShare>,
+    /// Solves from readings: each tendon pulled in, with the bend its pull asks of
+    /// the rod by constant-curvature kinematics (pull over hole radius, rad) as its
+    /// `intensity`, largest first; empty otherwise. A pull can ask for a bend no
+    /// tension reaches (the tensions the solve reached then say little).
+    pub pulls: Vec<LoadShare>,
 }
 
 impl Workspace {
@@ -78,6 +84,24 @@ pub fn diagnose(
     params: &[super::ParamSite],
     theta: &[f64],
     report: &SolveReport,
+) -> Diagnosis {
+    let outcome = (report.status, report.residual, report.tolerance);
+    diagnose_named(robot, loads, params, theta, &|_| None, outcome)
+}
+
+/// Names a cable's share instead of `loads.tensions_n[j]`: `Some((field, value))`
+/// (a displacement-driven tendon: its readings column and pull).
+pub(crate) type CableNames<'a> = &'a dyn Fn(usize) -> Option<(String, String)>;
+
+/// [`diagnose`] with cables named by `names` and the outcome `(status, residual,
+/// tolerance)` of whatever solve ran (a tendon solve's residual is in m).
+pub(crate) fn diagnose_named(
+    robot: &Robot,
+    loads: &Loads,
+    params: &[super::ParamSite],
+    theta: &[f64],
+    names: CableNames<'_>,
+    (status, residual, tolerance): (SolveStatus, f64, f64),
 ) -> Diagnosis {
     let mut shares = Vec::new();
     let g = nalgebra::Vector3::from(loads.gravity_m_s2).norm();
@@ -131,14 +155,22 @@ pub fn diagnose(
                     ),
                     "a point torque".to_string(),
                 ),
-                IntensitySource::Cables { section, cable } => (
-                    format!("loads.tensions_n[{cable}]"),
-                    format!("{} N", Num(loads.tension(cable))),
-                    format!(
-                        "the net moment of the cables ending in section {section}, this one \
+                IntensitySource::Cables { section, cable } => {
+                    let (field, value) = names(cable).unwrap_or_else(|| {
+                        (
+                            format!("loads.tensions_n[{cable}]"),
+                            format!("{} N", Num(loads.tension(cable))),
+                        )
+                    });
+                    (
+                        field,
+                        value,
+                        format!(
+                            "the net moment of the cables ending in section {section}, this one \
                          pulling hardest"
-                    ),
-                ),
+                        ),
+                    )
+                }
                 IntensitySource::Param { index } => (
                     format!("load parameter {index}"),
                     format!("{}", Num(theta.get(index).copied().unwrap_or(f64::NAN))),
@@ -155,11 +187,12 @@ pub fn diagnose(
         .collect();
     out.sort_by(|a, b| b.intensity.total_cmp(&a.intensity));
     Diagnosis {
-        status: report.status,
-        residual: report.residual,
-        tolerance: report.tolerance,
+        status,
+        residual,
+        tolerance,
         intensity: super::intensity::load_intensity(robot, loads, params, theta),
         loads: out,
+        pulls: Vec::new(),
     }
 }
 
@@ -167,7 +200,26 @@ impl Diagnosis {
     /// The loads carry the blame: intensity above [`LOADS_BLAMED_ABOVE`] (or not a
     /// number: loads beyond the range of `f64`).
     pub fn loads_blamed(&self) -> bool {
-        self.intensity > LOADS_BLAMED_ABOVE || self.intensity.is_nan()
+        self.intensity > LOADS_BLAMED_ABOVE || self.intensity.is_nan() || self.pull_blamed()
+    }
+
+    /// A pull asks for a bend above [`LOADS_BLAMED_ABOVE`] rad (the segment curling
+    /// back on itself).
+    fn pull_blamed(&self) -> bool {
+        self.pulls
+            .first()
+            .is_some_and(|p| p.intensity > LOADS_BLAMED_ABOVE)
+    }
+
+    /// The input to reduce first: the largest pull when it is blamed, else the
+    /// largest load.
+    fn culprit(&self) -> &str {
+        let first = if self.pull_blamed() {
+            self.pulls.first()
+        } else {
+            self.loads.first()
+        };
+        first.map_or("the loads", |s| s.field.as_str())
     }
 }
 
@@ -203,22 +255,34 @@ impl fmt::Display for Diagnosis {
                 )?;
             }
         }
+        if !self.pulls.is_empty() {
+            write!(f, "; the readings pull in:")?;
+            for (k, s) in self.pulls.iter().take(NAMED).enumerate() {
+                let sep = if k == 0 { " " } else { "; " };
+                write!(
+                    f,
+                    "{sep}{} = {} ({}) {:.3} rad",
+                    s.field, s.value, s.what, s.intensity
+                )?;
+            }
+        }
         if self.status.is_converged() {
             return write!(f, ".");
         }
         if self.loads_blamed() {
             write!(
                 f,
-                ". Above an intensity of {LOADS_BLAMED_ABOVE} looped or inverted equilibria \
-                 exist besides the one loaded from rest, and a cold solve may not reach it: \
-                 reduce {} (the largest), or reach the load as a ramp of warm solves from a \
-                 smaller one",
-                self.loads.first().map_or("the loads", |s| s.field.as_str())
+                ". Above {LOADS_BLAMED_ABOVE} rad (a load's intensity, or the bend a pull \
+                 asks for) looped or inverted equilibria exist besides the one loaded from \
+                 rest, and a cold solve may not reach it: reduce {} (the largest), or reach \
+                 it as a ramp of warm solves from a smaller one",
+                self.culprit()
             )
         } else {
             write!(
                 f,
-                ". The loads are mild (intensity at most {LOADS_BLAMED_ABOVE}): the cause is \
+                ". The loads are mild (intensity, and any pull's bend, at most \
+                 {LOADS_BLAMED_ABOVE} rad): the cause is \
                  numerical; try more integration steps or the adaptive integrator \
                  (numerics.integrator), a larger numerics.max_iterations, or \
                  numerics.continuation = true"

@@ -77,7 +77,7 @@ pub(crate) fn intensity_terms(
     loads: &Loads,
     params: &[ParamSite],
     theta: &[f64],
-    visit: &mut dyn FnMut(IntensitySource, f64),
+    visit: &mut impl FnMut(IntensitySource, f64),
 ) -> f64 {
     let ei = robot.min_bending_stiffness();
     let g = Vector3::from(loads.gravity_m_s2).norm();

@@ -15,6 +15,7 @@ mod pass;
 mod plan;
 mod workspace;
 
+pub(crate) use diagnosis::diagnose_named;
 pub use diagnosis::{diagnose, Diagnosis, LoadShare, LOADS_BLAMED_ABOVE};
 pub use pass::{Pose, Sample};
 pub(crate) use pass::{ARC_ROUNDS, LOCAL_TOL};

@@ -47,6 +47,8 @@ mod joint;
 mod nested;
 // Sensitivities with respect to extra load parameters (load estimation).
 mod loads;
+// Why a row did not converge, with the tendons named by their readings columns.
+mod diagnose;
 
 /// Outcome of one solve from readings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -91,7 +91,8 @@ class Estimator:
 
 # Tendon row dict (SI units): tip (3,) m; section_tips (k, 3) m; tensions (p,) N of
 #   the displacement-driven tendons; taut (p,) bool; lengths (c,) m of every cable;
-#   report: {status, converged, iterations, residual_m, forward_solves, slack}.
+#   report: {status, converged, iterations, residual_m, forward_solves, slack
+#            [, diagnosis]} (`diagnosis`, str, only when not converged).
 #   solve_line adds line, t_s, readings (p,) m and measured_tip (3,) m or None.
 TendonRow = Dict[str, Any]
 

@@ -138,13 +138,24 @@ pub fn stream(
         // (a row that did not converge is not the next row's warm start: the chain
         // solves the last converged row again before the next one)
         let ws = chain.workspace_mut();
+        // why a row did not converge, in the scene's terms (the loads and pulls that
+        // bend the rod most: `TendonWorkspace::diagnose`)
+        let why = (!rep.status.is_converged()).then(|| ws.diagnose().to_string());
         match output {
             Output::Json => {
                 let mut record = row_json(ws, &row, &rep, elapsed);
                 record["fallback"] = json!(fallback);
+                if let Some(why) = &why {
+                    record["diagnosis"] = json!(why);
+                }
                 writeln!(out, "{record}")?
             }
-            Output::Text => writeln!(out, "{}", row_text(ws, &row, &rep))?,
+            Output::Text => {
+                writeln!(out, "{}", row_text(ws, &row, &rep))?;
+                if let Some(why) = &why {
+                    writeln!(out, "            why: {why}")?;
+                }
+            }
         }
         if let Some(w) = samples.as_deref_mut() {
             let sol = ws.workspace_mut().solution();
