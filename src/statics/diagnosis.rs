@@ -244,28 +244,8 @@ impl fmt::Display for Diagnosis {
             ". Load intensity {:.3} rad (each load's bending angle on its own, summed)",
             self.intensity
         )?;
-        if !self.loads.is_empty() {
-            write!(f, "; largest:")?;
-            for (k, s) in self.loads.iter().take(NAMED).enumerate() {
-                let sep = if k == 0 { " " } else { "; " };
-                write!(
-                    f,
-                    "{sep}{} = {} ({}) {:.3} rad",
-                    s.field, s.value, s.what, s.intensity
-                )?;
-            }
-        }
-        if !self.pulls.is_empty() {
-            write!(f, "; the readings pull in:")?;
-            for (k, s) in self.pulls.iter().take(NAMED).enumerate() {
-                let sep = if k == 0 { " " } else { "; " };
-                write!(
-                    f,
-                    "{sep}{} = {} ({}) {:.3} rad",
-                    s.field, s.value, s.what, s.intensity
-                )?;
-            }
-        }
+        shares(f, "; largest:", &self.loads)?;
+        shares(f, "; the readings pull in:", &self.pulls)?;
         if self.status.is_converged() {
             return write!(f, ".");
         }
@@ -289,6 +269,23 @@ impl fmt::Display for Diagnosis {
             )
         }
     }
+}
+
+/// `title` and the first [`NAMED`] of `list` as `field = value (what) x rad`, if any.
+fn shares(f: &mut fmt::Formatter<'_>, title: &str, list: &[LoadShare]) -> fmt::Result {
+    if list.is_empty() {
+        return Ok(());
+    }
+    write!(f, "{title}")?;
+    for (k, s) in list.iter().take(NAMED).enumerate() {
+        let sep = if k == 0 { " " } else { "; " };
+        write!(
+            f,
+            "{sep}{} = {} ({}) {:.3} rad",
+            s.field, s.value, s.what, s.intensity
+        )?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
