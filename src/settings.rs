@@ -96,17 +96,9 @@ impl Default for Integrator {
 ///
 /// The two tolerances (this `tolerance_m` and [`SolverSettings::tolerance`]) are the
 /// user's accuracy choice. The defaults solve to round-off; a control loop can loosen
-/// both. Measured on the 443 FTDCR v4 val rows solved warm in sequence
-/// (`examples/tendon_profile`, `TOL`, `TOL_M`, session 21), `f64` / dual right-hand
-/// sides a row and the largest tip change from the defaults:
-///
-/// | `numerics.tolerance` | `tolerance_m` | RHS a row | tip change |
-/// |---|---|---|---|
-/// | 1e-10 | 1e-12 (defaults) | 1 209 / 46.3 | - |
-/// | 1e-6 | 1e-9 | 878 / 50.7 | 0.03 um |
-/// | 1e-4 | 1e-7 | 681 / 52.6 | 2.5 um |
-///
-/// (a dual right-hand side costs about 10 `f64` ones).
+/// both: what each pair costs and how far it moves the tips on the FTDCR v4 recording
+/// is in the README's paragraph on the two tolerances (measured with
+/// `examples/tendon_profile`, asserted in `tests/tendon_tolerance.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TendonSettings {

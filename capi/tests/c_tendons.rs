@@ -70,7 +70,22 @@ fn c_tendon_loop_runs_on_the_two_segment_tdcr() {
         .arg("100")
         .output()
         .unwrap();
+    // with an 80 mm amplitude the pull does not converge from the second tick on
+    // (5 mm on s1a with s1c held: the backbone is compressed, tensions ~100 N): the
+    // first such tick prints why through `cs_tendons_diagnosis`, naming the pull
+    let far = Command::new(&exe)
+        .arg(root().join("data/scenes/tdcr_two_segment.toml"))
+        .args(["30", "0.08"])
+        .output()
+        .unwrap();
     let _ = std::fs::remove_dir_all(&out_dir);
+    let far_err = String::from_utf8_lossy(&far.stderr);
+    assert!(
+        far_err.contains("did not converge: not converged")
+            && far_err.contains("the readings pull in: readings column s1a = "),
+        "{far_err}"
+    );
+    assert_eq!(far_err.matches("did not converge").count(), 1, "{far_err}");
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert!(
         run.status.success(),

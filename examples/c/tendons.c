@@ -7,7 +7,9 @@
  *   cargo build --release -p cablesense-capi
  *   cc -O2 -std=c11 -I capi/include examples/c/tendons.c
  *      target/release/libcablesense_capi.a -lpthread -ldl -lm -o tendons   (one line)
- *   ./tendons data/scenes/tdcr_two_segment.toml 200 */
+ *   ./tendons data/scenes/tdcr_two_segment.toml 200 [AMPLITUDE_M]
+ * (the pull's amplitude, default 1e-3 m; the first tick that does not converge, e.g.
+ * at 0.08 m, prints why to stderr through cs_tendons_diagnosis) */
 #include "cablesense.h"
 
 #include <math.h>
@@ -60,6 +62,7 @@ int main(int argc, char **argv) {
   }
   int ticks = argc > 2 ? atoi(argv[2]) : 200;
   if (ticks < 1) ticks = 1;
+  double amplitude = argc > 3 ? atof(argv[3]) : 1e-3;
   char *scene = read_file(argv[1]);
   CsTendons *t = NULL;
   if (cs_tendons_new(scene, &t) != CS_CODE_OK) {
@@ -76,8 +79,9 @@ int main(int argc, char **argv) {
   double *elapsed = malloc(sizeof(double) * (size_t)ticks);
   int converged = 0, slack_rows = 0;
   for (int k = 0; k < ticks; ++k) {
-    /* tendon 0 pulled in and tendon 1 paid out, then the other way, up to 1 mm */
-    double x = 1e-3 * sin(2.0 * 3.14159265358979 * k / 100.0);
+    /* tendon 0 pulled in and tendon 1 paid out, then the other way, up to the
+     * amplitude */
+    double x = amplitude * sin(2.0 * 3.14159265358979 * k / 100.0);
     q[0] = x > 0 ? x : 0.0;
     q[1] = x < 0 ? -x : 0.0;
     CsTendonInfo info;
@@ -92,6 +96,11 @@ int main(int argc, char **argv) {
     }
     converged += info.status == 0;
     slack_rows += info.slack > 0;
+    if (info.status != 0 && converged == k) { /* the first tick that did not converge */
+      char why[2048]; /* the diagnosis allocates: only after a failed solve */
+      if (cs_tendons_diagnosis(t, why, sizeof why, NULL) == CS_CODE_OK)
+        fprintf(stderr, "tick %d did not converge: %s\n", k, why);
+    }
     if (k == 25) { /* the peak pull of tendon 0 */
       printf("peak tip (mm): %.4f %.4f %.4f\n", tip[0] * 1e3, tip[1] * 1e3, tip[2] * 1e3);
       printf("peak tensions (N):");
