@@ -26,6 +26,13 @@ use std::fmt;
 /// guard's threshold (`CERTIFY_INTENSITY`), where equilibria other than the one
 /// loaded from rest start to exist.
 pub const LOADS_BLAMED_ABOVE: f64 = 3.0;
+/// Fraction of the Euler load of the rod between two disks from which a failed solve
+/// from readings is put down to the backbone's compression. Measured on the textbook
+/// TDCR (`tdcr_two_segment`, 1 mm NiTi rod, disks 10 mm apart, Euler load 291 N) with
+/// one tendon pulled and its two antagonists held: 2 mm asks for 0.61 of it (the
+/// solve converges with ~60 N in each tendon, as the estimate says), 3 mm for 0.91
+/// (`non_finite`), 5 mm for 1.5 (`stalled`).
+pub const COMPRESSION_BLAMED_ABOVE: f64 = 0.75;
 /// Loads named in a diagnosis at most (the largest first).
 const NAMED: usize = 4;
 
@@ -61,6 +68,11 @@ pub struct Diagnosis {
     /// `intensity`, largest first; empty otherwise. A pull can ask for a bend no
     /// tension reaches (the tensions the solve reached then say little).
     pub pulls: Vec<LoadShare>,
+    /// Solves from readings: the largest axial load that the pulls of one section's
+    /// tendons ask of the backbone when they do not cancel (the others held), with
+    /// the pretensions, as a fraction (`intensity`) of the Euler load `pi^2 EI/h^2`
+    /// of the rod between two disks `h` apart; `None` otherwise.
+    pub compression: Option<LoadShare>,
 }
 
 impl Workspace {
@@ -193,6 +205,7 @@ pub(crate) fn diagnose_named(
         intensity: super::intensity::load_intensity(robot, loads, params, theta),
         loads: out,
         pulls: Vec::new(),
+        compression: None,
     }
 }
 
@@ -200,7 +213,18 @@ impl Diagnosis {
     /// The loads carry the blame: intensity above [`LOADS_BLAMED_ABOVE`] (or not a
     /// number: loads beyond the range of `f64`).
     pub fn loads_blamed(&self) -> bool {
-        self.intensity > LOADS_BLAMED_ABOVE || self.intensity.is_nan() || self.pull_blamed()
+        self.intensity > LOADS_BLAMED_ABOVE
+            || self.intensity.is_nan()
+            || self.pull_blamed()
+            || self.compression_blamed()
+    }
+
+    /// The backbone is compressed to at least [`COMPRESSION_BLAMED_ABOVE`] of its
+    /// Euler load between two disks.
+    fn compression_blamed(&self) -> bool {
+        self.compression
+            .as_ref()
+            .is_some_and(|c| c.intensity >= COMPRESSION_BLAMED_ABOVE)
     }
 
     /// A pull asks for a bend above [`LOADS_BLAMED_ABOVE`] rad (the segment curling
@@ -214,7 +238,9 @@ impl Diagnosis {
     /// The input to reduce first: the largest pull when it is blamed, else the
     /// largest load.
     fn culprit(&self) -> &str {
-        let first = if self.pull_blamed() {
+        let first = if self.compression_blamed() {
+            self.compression.as_ref()
+        } else if self.pull_blamed() {
             self.pulls.first()
         } else {
             self.loads.first()
@@ -246,10 +272,26 @@ impl fmt::Display for Diagnosis {
         )?;
         shares(f, "; largest:", &self.loads)?;
         shares(f, "; the readings pull in:", &self.pulls)?;
+        if let Some(c) = &self.compression {
+            write!(
+                f,
+                "; {} = {} {}: {:.2} of that load",
+                c.field, c.value, c.what, c.intensity
+            )?;
+        }
         if self.status.is_converged() {
             return write!(f, ".");
         }
-        if self.loads_blamed() {
+        if self.compression_blamed() {
+            write!(
+                f,
+                ". The backbone may buckle between disks (compressed to at least \
+                 {COMPRESSION_BLAMED_ABOVE} of the Euler load of the rod between two disks) \
+                 where tendons pull together: pay their antagonists out with the pull, or \
+                 reduce {}",
+                self.culprit()
+            )
+        } else if self.loads_blamed() {
             write!(
                 f,
                 ". Above {LOADS_BLAMED_ABOVE} rad (a load's intensity, or the bend a pull \
@@ -262,7 +304,8 @@ impl fmt::Display for Diagnosis {
             write!(
                 f,
                 ". The loads are mild (intensity, and any pull's bend, at most \
-                 {LOADS_BLAMED_ABOVE} rad): the cause is \
+                 {LOADS_BLAMED_ABOVE} rad; any compression by the pulls below \
+                 {COMPRESSION_BLAMED_ABOVE} of the Euler load between disks): the cause is \
                  numerical; try more integration steps or the adaptive integrator \
                  (numerics.integrator), a larger numerics.max_iterations, or \
                  numerics.continuation = true"

@@ -16,7 +16,7 @@ mod plan;
 mod workspace;
 
 pub(crate) use diagnosis::diagnose_named;
-pub use diagnosis::{diagnose, Diagnosis, LoadShare, LOADS_BLAMED_ABOVE};
+pub use diagnosis::{diagnose, Diagnosis, LoadShare, COMPRESSION_BLAMED_ABOVE, LOADS_BLAMED_ABOVE};
 pub use pass::{Pose, Sample};
 pub(crate) use pass::{ARC_ROUNDS, LOCAL_TOL};
 pub use plan::ParamSite;
