@@ -190,7 +190,8 @@ impl TendonSolver {
     /// Solve every row of a 2-D float array `rows` (n, p) in order, warm-started
     /// from row to row (and from the previous call), with the GIL released for the
     /// whole batch. Returns {tip (n, 3), section_tips (n, k, 3), tensions (n, p),
-    /// taut (n, p) bool, converged (n,) bool, status [n], iterations (n,)}. A bad
+    /// taut (n, p) bool, converged (n,) bool, status [n], iterations (n,),
+    /// diagnosis [n] (why a row did not converge, None for a converged one)}. A bad
     /// reading raises `ReadingsError` with `field` `rows[i].readings[j] (column)`;
     /// the rows before it are solved and the solver keeps their state.
     fn solve_many<'py>(
@@ -255,6 +256,8 @@ impl TendonSolver {
         d.set_item("status", status)?;
         let iterations: Vec<u64> = solved.iter().map(|r| r.report.iterations as u64).collect();
         d.set_item("iterations", PyArray1::from_vec(py, iterations))?;
+        let diagnosis: Vec<Option<String>> = solved.iter().map(|r| r.diagnosis.clone()).collect();
+        d.set_item("diagnosis", diagnosis)?;
         Ok(d)
     }
 

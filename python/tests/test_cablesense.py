@@ -171,6 +171,11 @@ def test_unreachable_pull_is_diagnosed():
     assert not row["report"]["converged"]
     why = row["report"]["diagnosis"]
     assert "readings column s1a = 80 mm" in why and "may buckle between disks" in why
+    # the batch form: one entry a row, None where the row converged
+    many = cablesense.TendonSolver(cablesense.Scene.from_file(TDCR)).solve_many(
+        np.array([[0.0] * 6, [0.08, 0.0, 0.0, 0.0, 0.0, 0.0]])
+    )
+    assert many["diagnosis"][0] is None and "s1a" in many["diagnosis"][1]
 
 
 def test_scene_tendon_settings():

@@ -123,7 +123,8 @@ class TendonSolver:
         """One row of readings (m, in ``columns`` order)."""
     def solve_many(self, rows: npt.NDArray[np.float64]) -> Dict[str, Any]:
         """Rows (n, p) in order, warm-started: tip (n, 3), section_tips (n, k, 3),
-        tensions (n, p), taut (n, p), converged (n,), status [n], iterations (n,)."""
+        tensions (n, p), taut (n, p), converged (n,), status [n], iterations (n,),
+        diagnosis [n] (str why a row did not converge, None when it did)."""
     def solve_line(self, line_no: int, text: str) -> Optional[TendonRow]:
         """One line of a readings file (CSV with header, or JSON lines); None for a
         header, comment or blank line."""
