@@ -118,11 +118,19 @@ pub(crate) fn diagnose_named(
     let mut shares = Vec::new();
     let g = nalgebra::Vector3::from(loads.gravity_m_s2).norm();
     let spec = robot.spec();
+    // the intensity as `load_intensity` sums it (every term, in the same order)
+    let mut sum = 0.0;
     let ei = intensity_terms(robot, loads, params, theta, &mut |src, term| {
+        sum += term;
         if term > 0.0 || term.is_nan() {
             shares.push((src, term));
         }
     });
+    let intensity = if ei.is_nan() || ei <= 0.0 || !sum.is_finite() {
+        f64::INFINITY
+    } else {
+        sum / ei
+    };
     let mut out: Vec<LoadShare> = shares
         .into_iter()
         .map(|(src, term)| {
@@ -202,7 +210,7 @@ pub(crate) fn diagnose_named(
         status,
         residual,
         tolerance,
-        intensity: super::intensity::load_intensity(robot, loads, params, theta),
+        intensity,
         loads: out,
         pulls: Vec::new(),
         compression: None,

@@ -169,17 +169,9 @@ impl Workspace {
         self.cold_guess(0.0);
         let sign0 = match self.tangent(0.0) {
             Ok(sign) => sign,
-            Err(st) => {
-                // nothing was followed: hand back the full-load evaluation of the
-                // start with the guard's verdict, never the unloaded point (whose
-                // residual is exactly 0 and would read as converged: a fuzzed RK4
-                // rod with one step per section, ill-conditioned at zero load,
-                // reported `Converged` at load 0 with an exploded tip)
-                self.eval_at(false, 1.0);
-                self.best_res = f64::INFINITY;
-                self.branch_verdict = true;
-                return (st, 0, 0);
-            }
+            // (the unloaded point left here is re-evaluated at full load before its
+            // status is read: `Workspace::solve`)
+            Err(st) => return (st, 0, 0),
         };
         self.x_ok.copy_from_slice(&self.x);
         self.x_prev.copy_from_slice(&self.x_tan);

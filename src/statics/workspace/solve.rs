@@ -117,6 +117,14 @@ impl Workspace {
             self.b64.local_tol = LOCAL_TOL;
             self.eval_at(false, 1.0);
         }
+        if matches!(self.last_pass, Some(lam) if lam != 1.0) {
+            // a path that stopped at a partial load (a continuation whose first
+            // tangent failed) left that load's residual: a status is only ever read
+            // from the full load's (the fuzzed RK4 rod of
+            // `fuzz/regressions/forward_solve/arc_converged_with_infinite_cable_length.bin`
+            // was reported `Converged` at load 0, its residual exactly 0)
+            self.eval_at(false, 1.0);
+        }
         // the status of the state handed back, decided like every other one, unless
         // the branch guard gave its verdict on this solve
         let status = if self.branch_verdict {

@@ -33,7 +33,7 @@ impl TendonWorkspace {
         // the bend each pull asks of the rod by constant-curvature kinematics (path
         // change = hole radius x bending angle: the CC rung's displacement control)
         for (i, &j) in self.driven.iter().enumerate() {
-            let pull = self.free0[i] - self.free[i];
+            let pull = self.pull(i);
             let radius = ws.robot().cables()[j]
                 .hole_local
                 .last()
@@ -50,6 +50,11 @@ impl TendonWorkspace {
         d.pulls.sort_by(|a, b| b.intensity.total_cmp(&a.intensity));
         d.compression = self.compression();
         d
+    }
+
+    /// How far driven tendon `i` is pulled in from reading 0 (m; `L0 - L_f`).
+    fn pull(&self, i: usize) -> f64 {
+        self.free0[i] - self.free[i]
     }
 
     /// The largest axial load the pulls ask of the backbone, as a share of the Euler
@@ -78,8 +83,7 @@ impl TendonWorkspace {
                 continue;
             }
             let n = group.len() as f64;
-            let pull = |i: usize| self.free0[i] - self.free[i];
-            let q = group.iter().map(|&i| pull(i)).sum::<f64>() / n;
+            let q = group.iter().map(|&i| self.pull(i)).sum::<f64>() / n;
             if q <= 0.0 {
                 continue;
             }
@@ -181,8 +185,13 @@ mod tests {
     fn held_antagonists_compress_the_backbone() {
         let scene = Scene::load("data/scenes/tdcr_two_segment.toml").expect("shipped scene");
         let mut ws = scene.tendon_workspace().expect("workspace");
-        let ei = 60.0e9 * std::f64::consts::PI * 1e-12 / 64.0;
-        let euler = std::f64::consts::PI.powi(2) * ei / 1e-4;
+        // the Euler load from the scene's rod and disk gap (checked against 291 N)
+        let robot = ws.workspace().robot();
+        let ei = robot.min_bending_stiffness();
+        let disks = robot.guides();
+        let gap = disks[1].s - disks[0].s;
+        let euler = std::f64::consts::PI.powi(2) * ei / (gap * gap);
+        assert!((euler - 291.0).abs() < 1.0, "{euler} N");
         let rest = ws.solve_readings(&[0.0; 6]).expect("valid");
         assert!(rest.status.is_converged(), "{rest:?}");
         let rep = ws
