@@ -353,3 +353,15 @@ pub fn joint_partials_against_central_differences(
     }
     Ok(())
 }
+
+/// The library's default tolerances (`numerics.tolerance` 1e-10, `[numerics.tendons]
+/// tolerance_m` 1e-12 m) on `scene`. Checks against round-off (derivatives against
+/// central differences, cold solves against warm ones) need them; the shipped FTDCR
+/// v4 scenes solve to 1e-4 and 1e-7 m since session 27 (their accuracy budget: a
+/// tenth of the arc coupling's error, `tests/tendon_tolerance.rs`).
+pub fn default_tolerances(mut scene: cablesense::Scene) -> cablesense::Scene {
+    let d = SolverSettings::default();
+    scene.numerics.tolerance = d.tolerance;
+    scene.numerics.tendons.tolerance_m = d.tendons.tolerance_m;
+    scene
+}
