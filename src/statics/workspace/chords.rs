@@ -72,6 +72,13 @@ impl Workspace {
             frac.clamp(LOCAL_TOL, 1e-9)
         }
     }
+
+    /// A pass here depends on more than the unknowns and `theta`: the condensed
+    /// coupling settles the next holes from where the last pass left them. Elsewhere
+    /// an evaluation can be kept and restored instead of repeated.
+    pub(crate) fn settles_holes(&self) -> bool {
+        self.plan.condensed
+    }
 }
 
 #[cfg(test)]

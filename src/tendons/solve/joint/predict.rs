@@ -152,6 +152,8 @@ impl TendonWorkspace {
         }
         // evaluate there (the step from z_1 is Broyden's secant pair when kept)
         jb.f_prev.copy_from_slice(&jb.f_now);
+        self.joint_keep();
+        let jb = &mut self.joint;
         jb.xs.copy_from_slice(&jb.x0);
         jb.ts.copy_from_slice(&jb.t0);
         jb.x.copy_from_slice(&jb.zp[..n]);
@@ -172,10 +174,15 @@ impl TendonWorkspace {
                 RowStart::Evaluated(mp)
             }
             _ => {
-                // back to z_1 (its pass is the plain start's first evaluation)
+                // back to z_1: its kept evaluation (`keep`), else the plain start's
+                // first evaluation (a `merit0` within the tolerance still evaluates:
+                // the row would end at the restored point without a pass of its own)
                 self.joint_inner_tolerance(0.0);
                 self.t.copy_from_slice(&self.joint.t0);
                 self.joint.x.copy_from_slice(&self.joint.x0);
+                if merit0 > 1.0 && self.joint_restore() {
+                    return RowStart::Evaluated(merit0);
+                }
                 RowStart::Plain
             }
         }
