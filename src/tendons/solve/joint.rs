@@ -580,5 +580,11 @@ mod tests {
             }
         }
         assert_ne!(ChordPolicy::ARC, ChordPolicy::CONDENSED);
+        // a full step that does not raise the merit is always backtracked (only one
+        // that raises it past `hopeless` is not); the condensed rules never backtrack
+        for policy in [ChordPolicy::ARC, ChordPolicy::CONDENSED] {
+            assert!(policy.hopeless > 1.0, "{policy:?}");
+        }
+        assert_eq!(ChordPolicy::CONDENSED.trials, 1);
     }
 }
