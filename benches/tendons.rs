@@ -152,8 +152,9 @@ fn benches(c: &mut Criterion) {
     // the same warm rows at the library's default tolerances (`numerics.tolerance`
     // 1e-10, `numerics.tendons.tolerance_m` 1e-12 m), the scene's before session 27
     let mut tight_scene = scene.clone();
-    tight_scene.numerics.tolerance = 1e-10;
-    tight_scene.numerics.tendons.tolerance_m = 1e-12;
+    let defaults = cablesense::SolverSettings::default();
+    tight_scene.numerics.tolerance = defaults.tolerance;
+    tight_scene.numerics.tendons.tolerance_m = defaults.tendons.tolerance_m;
     let mut ws_tight = tight_scene.tendon_workspace().expect("tendon workspace");
     g.bench_function("tendon_readings_warm_tight", |b| {
         b.iter(|| {

@@ -153,17 +153,14 @@ impl Loads {
             if f < ea {
                 continue;
             }
-            return Err(ModelError::OutOfRange {
-                field: format!("loads.point[{i}].force_n"),
-                value: f,
-                why: format!(
-                    "its magnitude reaches the axial stiffness EA = {} N of section {k}, \
-                     which carries it: along the axis an axial strain of magnitude 1 or \
-                     beyond (the rod pressed to zero length, or stretched to twice its \
-                     length), not a physical state",
-                    crate::error::Num(ea)
-                ),
-            });
+            return Err(ea_error(
+                format!("loads.point[{i}].force_n"),
+                f,
+                format!("its magnitude, carried by section {k}, reaches"),
+                ea,
+                "along the axis an axial strain of magnitude 1 or beyond (the rod pressed to \
+                 zero length, or stretched to twice its length)",
+            ));
         }
         Ok(())
     }
@@ -278,12 +275,22 @@ impl Loads {
 /// `field = value` is out of range because `what` (an axial load, ending in "reach" or
 /// "reaches") a section's axial stiffness `ea`: an axial strain of -1 or beyond.
 fn beyond_ea(field: String, value: f64, what: String, ea: f64) -> ModelError {
+    ea_error(
+        field,
+        value,
+        what,
+        ea,
+        "an axial strain of -1 or beyond (the rod pressed to zero length or inverted)",
+    )
+}
+
+/// `field = value` refused: `what` the axial stiffness `ea`, which is `strain`.
+fn ea_error(field: String, value: f64, what: String, ea: f64, strain: &str) -> ModelError {
     ModelError::OutOfRange {
         field,
         value,
         why: format!(
-            "{what} its axial stiffness EA = {} N: an axial strain of -1 or beyond (the rod \
-             pressed to zero length or inverted), not a physical state",
+            "{what} its axial stiffness EA = {} N: {strain}, not a physical state",
             crate::error::Num(ea)
         ),
     }

@@ -14,7 +14,7 @@
 //! rod's `EA`, so valid input) ended `max_iterations` after 105 ms with a tip printed
 //! as if it were a result and no reason given.
 
-use super::intensity::{intensity_terms, IntensitySource};
+use super::intensity::{intensity_of, intensity_terms, IntensitySource};
 use super::{SolveReport, SolveStatus, Workspace};
 use crate::error::Num;
 use crate::loads::Loads;
@@ -126,11 +126,7 @@ pub(crate) fn diagnose_named(
             shares.push((src, term));
         }
     });
-    let intensity = if ei.is_nan() || ei <= 0.0 || !sum.is_finite() {
-        f64::INFINITY
-    } else {
-        sum / ei
-    };
+    let intensity = intensity_of(sum, ei);
     let mut out: Vec<LoadShare> = shares
         .into_iter()
         .map(|(src, term)| {

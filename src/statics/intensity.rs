@@ -58,13 +58,16 @@ pub(crate) fn load_intensity(
 ) -> f64 {
     let mut sum = 0.0;
     let ei = intensity_terms(robot, loads, params, theta, &mut |_, t| sum += t);
-    if ei.is_nan() || ei <= 0.0 {
-        return f64::INFINITY;
-    }
-    if sum.is_finite() {
-        sum / ei
-    } else {
+    intensity_of(sum, ei)
+}
+
+/// The intensity from the sum of [`intensity_terms`]' terms and `EI_min`: infinite
+/// when either is not a usable number.
+pub(crate) fn intensity_of(sum: f64, ei: f64) -> f64 {
+    if ei.is_nan() || ei <= 0.0 || !sum.is_finite() {
         f64::INFINITY
+    } else {
+        sum / ei
     }
 }
 

@@ -66,7 +66,7 @@ impl Workspace {
     /// every solve that converged from it re-evaluate its point "with settled holes":
     /// one `f64` pass spent on the same arithmetic.
     pub(super) fn settle_tolerance(&self, frac: f64) -> f64 {
-        if !self.plan.condensed || frac.is_nan() {
+        if !self.settles_holes() || frac.is_nan() {
             LOCAL_TOL
         } else {
             frac.clamp(LOCAL_TOL, 1e-9)
