@@ -200,6 +200,21 @@ impl<const N: usize> Real for Dual<N> {
             d,
         }
     }
+    #[inline(always)]
+    fn add_cst(self, c: f64) -> Self {
+        Self {
+            v: self.v + c,
+            d: self.d,
+        }
+    }
+    #[inline(always)]
+    fn chain(&self, f: f64, df: f64) -> Self {
+        let mut d = self.d;
+        for di in d.iter_mut() {
+            *di *= df;
+        }
+        Self { v: f, d }
+    }
 }
 
 #[cfg(test)]
@@ -245,6 +260,21 @@ mod tests {
         let fused = cfg!(any(target_feature = "fma", target_arch = "aarch64"));
         let r = 0.1f64.mul_add_r(10.0, -1.0);
         assert_eq!(r != 0.0, fused, "{r:e}");
+    }
+
+    /// `add_cst` moves the value only; `chain` is the chain rule (here of `exp`).
+    #[test]
+    fn constant_sums_and_the_chain_rule() {
+        let mut x = Dual::<2>::variable(0.5, 0);
+        x.d[1] = -2.0;
+        let y = x.add_cst(1.25);
+        assert_eq!((y.v, y.d), (1.75, [1.0, -2.0]));
+        assert_eq!(y.v, (x + Dual::constant(1.25)).v);
+        let e = x.chain(x.v.exp(), x.v.exp());
+        assert_eq!(e.v, 0.5f64.exp());
+        assert_eq!(e.d, [0.5f64.exp(), -2.0 * 0.5f64.exp()]);
+        assert_eq!(0.5f64.chain(3.0, 7.0), 3.0);
+        assert_eq!(0.5f64.add_cst(0.25), 0.75);
     }
 
     #[test]

@@ -83,6 +83,13 @@ pub trait Real:
     fn mul_add_r(self, a: Self, b: Self) -> Self;
     /// `self k + b` for a plain `f64` factor, likewise.
     fn scale_add(self, k: f64, b: Self) -> Self;
+    /// `self + c` for a plain `f64` constant: only the value part changes (a
+    /// [`Dual`]'s derivative parts are left as they are, not added to zeros).
+    fn add_cst(self, c: f64) -> Self;
+    /// A scalar function `f` of `self` from its value `f(x)` and derivative `f'(x)`
+    /// at `x = self.re()`: `f(x) + f'(x) dx` (the chain rule on every direction at
+    /// once; an `f64` is just `f(x)`).
+    fn chain(&self, f: f64, df: f64) -> Self;
 }
 
 impl Real for f64 {
@@ -122,5 +129,13 @@ impl Real for f64 {
     #[inline(always)]
     fn scale_add(self, k: f64, b: Self) -> Self {
         fma(self, k, b)
+    }
+    #[inline(always)]
+    fn add_cst(self, c: f64) -> Self {
+        self + c
+    }
+    #[inline(always)]
+    fn chain(&self, f: f64, _df: f64) -> Self {
+        f
     }
 }

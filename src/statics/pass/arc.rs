@@ -45,10 +45,10 @@
 
 use super::{actuator_tension, unit, v3, PassBuf};
 use crate::integrate::{Coeffs, State};
-use crate::math::{cross, mat_t_vec, mat_vec, mat_vec_f64, Real};
+use crate::math::{cross, fma, mat_t_vec, mat_vec, mat_vec_f64, Dual, Real};
 #[cfg(doc)]
 use crate::settings::SolverSettings;
-use crate::statics::plan::Plan;
+use crate::statics::plan::{ArcChord, Plan};
 use nalgebra::{Matrix3, Vector3};
 
 /// Default rounds of "predict the next holes from the jump of the last round" at a
@@ -67,8 +67,28 @@ pub(crate) const ARC_ROUNDS: usize = 3;
 /// `sin x / x`, `(1 - cos x) / x^2` and `(x - sin x) / x^3` of `x = sqrt(x2)`: series
 /// for `x2 <= 0.25` (truncation below 3e-11; no square root, so a dual at `x = 0` has
 /// finite derivatives), closed form above.
+///
+/// For a dual `x2` the three functions and their derivatives are evaluated once at
+/// the value (a `Dual<1>`: the same value arithmetic as an `f64`), and the chain rule
+/// ([`Real::chain`]) gives every direction with one product each, instead of a
+/// dozen dual operations per function (a `Dual<15>` sweep on the FTDCR v4 val rows:
+/// benches/README.md, session 28).
 #[inline]
 fn exp_coefficients<T: Real>(x2: T) -> (T, T, T) {
+    if T::DIRS == 0 {
+        return exp_series(x2);
+    }
+    let (a, b, c) = exp_series(Dual::<1>::variable(x2.re(), 0));
+    (
+        x2.chain(a.v, a.d[0]),
+        x2.chain(b.v, b.d[0]),
+        x2.chain(c.v, c.d[0]),
+    )
+}
+
+/// The functions of [`exp_coefficients`] over any scalar.
+#[inline]
+fn exp_series<T: Real>(x2: T) -> (T, T, T) {
     if x2.re() <= 0.25 {
         let one = T::one();
         let a = one
@@ -106,6 +126,19 @@ fn cross_f64<T: Real>(a: &Vector3<T>, b: &Vector3<f64>) -> Vector3<T> {
     )
 }
 
+/// `a + c` for a plain `f64` vector `c`: only the value parts change
+/// ([`Real::add_cst`]; the same values as adding `c` promoted to `T`).
+#[inline(always)]
+fn plus_f64<T: Real>(a: Vector3<T>, c: &Vector3<f64>) -> Vector3<T> {
+    Vector3::new(a.x.add_cst(c.x), a.y.add_cst(c.y), a.z.add_cst(c.z))
+}
+
+/// `a - c` for a plain `f64` vector `c`, likewise.
+#[inline(always)]
+fn minus_f64<T: Real>(a: Vector3<T>, c: &Vector3<f64>) -> Vector3<T> {
+    Vector3::new(a.x.add_cst(-c.x), a.y.add_cst(-c.y), a.z.add_cst(-c.z))
+}
+
 /// `b x a` for a plain `f64` vector `b`.
 #[inline(always)]
 fn f64_cross<T: Real>(b: &Vector3<f64>, a: &Vector3<T>) -> Vector3<T> {
@@ -129,7 +162,7 @@ fn predict_gap<T: Real>(h: f64, co: &Coeffs, nl: &Vector3<T>, ml: &Vector3<T>) -
         Vector3::new(
             nl.x.scale(co.inv_d.x),
             nl.y.scale(co.inv_d.y),
-            nl.z.scale(co.inv_d.z) + T::one(),
+            nl.z.scale(co.inv_d.z).add_cst(1.0),
         )
     };
     // body-frame moment over the gap to second order in s (no distributed load):
@@ -141,15 +174,16 @@ fn predict_gap<T: Real>(h: f64, co: &Coeffs, nl: &Vector3<T>, ml: &Vector3<T>) -
             m.z.scale(co.inv_c.z),
         )
     };
-    let u0 = bend(ml) + v3::<T>(&co.u_star);
+    let u0 = plus_f64(bend(ml), &co.u_star);
     let m1 = -(cross(&u0, ml) + cross(&v, nl));
     let u1 = bend(&m1);
-    let m2 = cross(&v, &cross(&u0, nl)) - cross(&u0, &m1) - cross(&u1, ml);
+    let un = cross(&u0, nl);
+    let m2 = cross(&v, &un) - cross(&u0, &m1) - cross(&u1, ml);
     // the rotation takes the mean curvature, the position the mean weighted by
     // 2 (h - s) / h^2 (both exact for a curvature quadratic in s)
     let at = |w1: f64, w2: f64| {
         let m = ml + m1.map(|x| x.scale(w1 * h)) + m2.map(|x| x.scale(w2 * h * h));
-        (bend(&m) + v3::<T>(&co.u_star)).map(|x| x.scale(h))
+        plus_f64(bend(&m), &co.u_star).map(|x| x.scale(h))
     };
     let (phi, psi) = (at(0.5, 1.0 / 6.0), at(1.0 / 3.0, 1.0 / 12.0));
     let (a, b, _) = exp_coefficients(phi.dot(&phi));
@@ -174,7 +208,7 @@ fn predict_gap<T: Real>(h: f64, co: &Coeffs, nl: &Vector3<T>, ml: &Vector3<T>) -
     let vm = if co.kirchhoff {
         v
     } else {
-        let dn = cross(&u0, nl).map(|x| x.scale(-0.5 * h));
+        let dn = un.map(|x| x.scale(-0.5 * h));
         v + Vector3::new(
             dn.x.scale(co.inv_d.x),
             dn.y.scale(co.inv_d.y),
@@ -184,6 +218,106 @@ fn predict_gap<T: Real>(h: f64, co: &Coeffs, nl: &Vector3<T>, ml: &Vector3<T>) -
     let pv = cross(&psi, &vm);
     let tau = (vm + pv.map(|x| x * bp) + cross(&psi, &pv).map(|x| x * cp)).map(|x| x.scale(h));
     Gap { e, tau }
+}
+
+/// One round's chords on (module docs) from the body-frame state `(nl, mlp)` just
+/// after the disk, summed in the disk's frame (force, moment). `tension(j)` is cable
+/// `j`'s chord tension; `per_chord` sees each chord with the value parts of its `d`
+/// and `d . d` (for the force per newton of tension, `d / |d|`).
+#[inline(always)]
+fn round_chords<S: Real>(
+    plan: &Plan,
+    g: usize,
+    nl: &Vector3<S>,
+    mlp: &Vector3<S>,
+    tension: impl Fn(usize) -> S,
+    mut per_chord: impl FnMut(&ArcChord, &Vector3<f64>, f64),
+) -> (Vector3<S>, Vector3<S>) {
+    let z = Vector3::new(S::zero(), S::zero(), S::zero());
+    let (mut fl, mut ml) = (z, z);
+    // one prediction per gap (every cable's, when the routes run disk to disk)
+    let mut gap: Option<Gap<S>> = None;
+    for a in &plan.arc_chords[g] {
+        if a.new_gap {
+            gap = None;
+        }
+        let gp = gap.get_or_insert_with(|| predict_gap(a.gap.0, &plan.coeffs[a.gap.1], nl, mlp));
+        let d = minus_f64(gp.tau + mat_vec_f64(&gp.e, &a.rho_next), &a.rho);
+        // t d / |d| (as `unit(d) * t`, with one product fewer per component)
+        let dd = d.dot(&d);
+        let f = if dd.re() > 0.0 {
+            per_chord(a, &d.map(|x| x.re()), dd.re());
+            let s = tension(a.cable) / dd.sqrt();
+            d.map(|x| x * s)
+        } else {
+            d
+        };
+        fl += f;
+        ml += f64_cross(&a.rho, &f);
+    }
+    (fl, ml)
+}
+
+/// `y += a x` over derivative parts.
+#[inline(always)]
+fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi = fma(a, *xi, *yi);
+    }
+}
+
+/// [`round_chords`] for a dual `T` by the chain rule. A round depends on the duals'
+/// directions only through its six inputs `(nl, mlp)` and the chord tensions, and on
+/// a tension only linearly (`f = t d / |d|`). So the round runs once over a
+/// `Dual<6>` seeded along its inputs (the same value arithmetic as over `T`, so the
+/// same values), and each output's directions are its six partials times the
+/// inputs' directions plus, per chord, `d / |d|` (and `rho x d / |d|`) times the
+/// tension's. A `Dual<15>` sweep on the FTDCR v4 val rows: 3.9 % fewer instructions
+/// (benches/README.md, session 28). Not inlined: inlined into `guide_chords` the
+/// sweep took 1.6 % more instructions than this way.
+#[inline(never)]
+fn round_chained<T: Real>(
+    plan: &Plan,
+    g: usize,
+    nl: &Vector3<T>,
+    mlp: &Vector3<T>,
+    arc_t: &[T],
+) -> (Vector3<T>, Vector3<T>) {
+    let inputs = [nl.x, nl.y, nl.z, mlp.x, mlp.y, mlp.z];
+    let seed = |k: usize| Dual::<6>::variable(inputs[k].re(), k);
+    let (nl6, ml6) = (
+        Vector3::new(seed(0), seed(1), seed(2)),
+        Vector3::new(seed(3), seed(4), seed(5)),
+    );
+    // the tensions' terms first, then the values and the inputs' terms
+    let mut out = [T::zero(); 6];
+    let (f6, m6) = round_chords(
+        plan,
+        g,
+        &nl6,
+        &ml6,
+        |j| Dual::<6>::constant(arc_t[j].re()),
+        |a, d, dd| {
+            let u = d * (1.0 / dd.sqrt());
+            let um = a.rho.cross(&u);
+            let te = arc_t[a.cable].eps();
+            for k in 0..3 {
+                axpy(out[k].eps_mut(), u[k], te);
+                axpy(out[3 + k].eps_mut(), um[k], te);
+            }
+        },
+    );
+    let local = [f6.x, f6.y, f6.z, m6.x, m6.y, m6.z];
+    for (o, l) in out.iter_mut().zip(&local) {
+        *o = o.add_cst(l.v);
+        for (i, x) in inputs.iter().enumerate() {
+            axpy(o.eps_mut(), l.d[i], x.eps());
+        }
+    }
+    (
+        Vector3::new(out[0], out[1], out[2]),
+        Vector3::new(out[3], out[4], out[5]),
+    )
 }
 
 /// The chords of guide `g` under the arc coupling: records the holes, applies the
@@ -264,28 +398,11 @@ pub(super) fn guide_chords<T: Real>(
     for _ in 0..plan.arc_rounds {
         // the state after the jump as the last round left it
         let (nl, mlp) = (nl0 - jnl - fl, ml0 - jml - ml);
-        fl = z;
-        ml = z;
-        // one prediction per gap (every cable's, when the routes run disk to disk)
-        let mut gap: Option<Gap<T>> = None;
-        for a in &plan.arc_chords[g] {
-            if a.new_gap {
-                gap = None;
-            }
-            let gp =
-                gap.get_or_insert_with(|| predict_gap(a.gap.0, &plan.coeffs[a.gap.1], &nl, &mlp));
-            let d = gp.tau + mat_vec_f64(&gp.e, &a.rho_next) - v3::<T>(&a.rho);
-            // t d / |d| (as `unit(d) * t`, with one product fewer per component)
-            let dd = d.dot(&d);
-            let f = if dd.re() > 0.0 {
-                let s = buf.arc_t[a.cable] / dd.sqrt();
-                d.map(|x| x * s)
-            } else {
-                d
-            };
-            fl += f;
-            ml += f64_cross(&a.rho, &f);
-        }
+        (fl, ml) = if T::DIRS == 0 {
+            round_chords(plan, g, &nl, &mlp, |j| buf.arc_t[j], |_, _, _| {})
+        } else {
+            round_chained(plan, g, &nl, &mlp, &buf.arc_t)
+        };
     }
     buf.arc_corr = [(fl - fl_mirror, ml - ml_mirror), buf.arc_corr[0]];
     buf.arc_corr_g = g;
@@ -381,6 +498,77 @@ mod tests {
         // one round (its correction carried, not extrapolated): every row converges
         // (asserted in `tips`), within 0.1 mm on average
         assert!(one.0 < 1e-4, "{one:?}");
+    }
+
+    /// The chain rule of a dual's [`exp_coefficients`] against the series and the
+    /// closed form evaluated over the dual itself (every direction through every
+    /// operation): the same values bit for bit, derivatives within 1e-12 relative
+    /// (the closed form cancels: 1e-13 apart at `x = 0.501`),
+    /// on both sides of the series' threshold.
+    #[test]
+    fn chained_exp_coefficients_match_the_dual_series() {
+        for x in [1e-3, 0.1, 0.3, 0.49, 0.501, 1.0, 2.5] {
+            let mut x2 = Dual::<3>::variable(x * x, 0);
+            x2.d = [1.0, -0.37, 2.5];
+            let got = exp_coefficients(x2);
+            let want = exp_series(x2);
+            for (g, w) in [got.0, got.1, got.2]
+                .into_iter()
+                .zip([want.0, want.1, want.2])
+            {
+                assert_eq!(g.v, w.v, "x {x}");
+                for (a, b) in g.d.iter().zip(&w.d) {
+                    assert!(
+                        (a - b).abs() <= 1e-12 * b.abs().max(1e-3),
+                        "x {x}: {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// A round by the chain rule ([`round_chained`]) against the same round over
+    /// `Dual<15>` in every operation ([`round_chords`]), at guides of each segment
+    /// of the shipped FTDCR v4 scene, with inputs and tensions whose directions are
+    /// all nonzero: the same values bit for bit, the derivatives within 1e-11 of the
+    /// largest. Fails if a tension's term or an input's partials go missing.
+    #[test]
+    fn a_chained_round_is_the_dual_round() {
+        let scene = crate::Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+        let mut tw = scene.tendon_workspace().expect("workspace");
+        let plan = tw.workspace_mut().plan_mut().clone();
+        type D = Dual<15>;
+        let var = |v: f64, k: usize| {
+            let mut x = D::constant(v);
+            for (i, d) in x.d.iter_mut().enumerate() {
+                *d = ((i * 7 + k * 13) % 11) as f64 / 11.0 - 0.4;
+            }
+            x
+        };
+        // body-frame force (N) and moment (N m) just after a disk, as on the robot
+        let nl = Vector3::new(var(0.3, 0), var(-0.2, 1), var(-6.0, 2));
+        let ml = Vector3::new(var(4e-3, 3), var(-2e-3, 4), var(1e-4, 5));
+        let arc_t: Vec<D> = (0..plan.cables.len())
+            .map(|j| var(1.5 + 0.3 * j as f64, 6 + j))
+            .collect();
+        let mut checked = 0;
+        for g in [0, 4, 12, 15, 25] {
+            if plan.arc_chords[g].is_empty() {
+                continue;
+            }
+            checked += 1;
+            let (f1, m1) = round_chained(&plan, g, &nl, &ml, &arc_t);
+            let (f2, m2) = round_chords(&plan, g, &nl, &ml, |j| arc_t[j], |_, _, _| {});
+            for (a, b) in f1.iter().chain(m1.iter()).zip(f2.iter().chain(m2.iter())) {
+                assert_eq!(a.v, b.v, "guide {g}");
+                let top = b.d.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                for (x, y) in a.d.iter().zip(&b.d) {
+                    assert!((x - y).abs() <= 1e-11 * top, "guide {g}: {x} vs {y}");
+                }
+                assert!(top > 0.0);
+            }
+        }
+        assert_eq!(checked, 5);
     }
 
     /// A Kirchhoff gap under a pure bending moment (no force) is a circular arc:
