@@ -177,8 +177,9 @@ pub(super) struct JointBufs {
     f_prev: Vec<f64>,
     step: Vec<f64>,
     hy: Vec<f64>,
-    /// `s^T H` of the Broyden update.
+    /// `s^T W H` of the Broyden update, and its residual change `y`.
     sth: Vec<f64>,
+    yv: Vec<f64>,
     /// Free lengths of the driven tendons (m) at the row's starting point (the
     /// previous row's) and at the row (continuation steps go from one to the other).
     pub(super) free_prev: Vec<f64>,
@@ -249,6 +250,7 @@ impl JointBufs {
             step: vec![0.0; n + p],
             hy: vec![0.0; n + p],
             sth: vec![0.0; n + p],
+            yv: vec![0.0; n + p],
             free_prev: vec![0.0; p],
             free_row: vec![0.0; p],
             lu_taut: vec![true; p],
