@@ -133,12 +133,6 @@ fn plus_f64<T: Real>(a: Vector3<T>, c: &Vector3<f64>) -> Vector3<T> {
     Vector3::new(a.x.add_cst(c.x), a.y.add_cst(c.y), a.z.add_cst(c.z))
 }
 
-/// `a - c` for a plain `f64` vector `c`, likewise.
-#[inline(always)]
-fn minus_f64<T: Real>(a: Vector3<T>, c: &Vector3<f64>) -> Vector3<T> {
-    Vector3::new(a.x.add_cst(-c.x), a.y.add_cst(-c.y), a.z.add_cst(-c.z))
-}
-
 /// `b x a` for a plain `f64` vector `b`.
 #[inline(always)]
 fn f64_cross<T: Real>(b: &Vector3<f64>, a: &Vector3<T>) -> Vector3<T> {
@@ -242,7 +236,7 @@ fn round_chords<S: Real>(
             gap = None;
         }
         let gp = gap.get_or_insert_with(|| predict_gap(a.gap.0, &plan.coeffs[a.gap.1], nl, mlp));
-        let d = minus_f64(gp.tau + mat_vec_f64(&gp.e, &a.rho_next), &a.rho);
+        let d = plus_f64(gp.tau + mat_vec_f64(&gp.e, &a.rho_next), &-a.rho);
         // t d / |d| (as `unit(d) * t`, with one product fewer per component)
         let dd = d.dot(&d);
         let f = if dd.re() > 0.0 {

@@ -103,8 +103,8 @@ impl ChordPolicy {
         hopeless: f64::INFINITY,
     };
     /// The arc coupling: an explicit pass is cheap (120 RHS and the disks' rounds)
-    /// and a `Dual<15>` sweep is worth ~12 of them, so a chord step backtracks
-    /// before it gives way, and every row tries it first. On the 443 FTDCR v4 val
+    /// and a `Dual<15>` sweep is worth ~12 of them, so a chord step is retried
+    /// before it gives way (halved until session 28, now `joint_chord_retry`), and every row tries it first. On the 443 FTDCR v4 val
     /// rows warm (`examples/tendon_profile`, `COUPLING=arc`), `f64` / dual RHS a row
     /// and callgrind instructions: the condensed policy 950 / 97.2, 1.322e9; this
     /// one 1 215 / 46.3, 1.132e9 (-14 %). Neighbours, measured with a scratch build
@@ -225,6 +225,13 @@ pub(super) struct JointBufs {
 }
 
 impl JointBufs {
+    /// Largest component of the step `dz` in the scaled shooting unknowns (the first
+    /// `n`), what [`MAX_STEP`] limits (a NaN component is skipped by `f64::max`; the
+    /// pass at such a point fails and is handled there).
+    pub(super) fn step_max(&self, n: usize) -> f64 {
+        self.dz[..n].iter().fold(0.0f64, |m, d| m.max(d.abs()))
+    }
+
     /// Drop the reused Jacobian (a cold start must not depend on earlier rows).
     pub(super) fn forget_jacobian(&mut self) {
         self.lu_valid = false;
@@ -421,9 +428,7 @@ impl TendonWorkspace {
                     self.joint_save_branches();
                     self.joint_linear_active_set(n, p);
                 }
-                let dx_max = self.joint.dz[..n]
-                    .iter()
-                    .fold(0.0f64, |m, d| m.max(d.abs()));
+                let dx_max = self.joint.step_max(n);
                 if fresh && first_step.is_infinite() {
                     first_step = dx_max;
                 }
@@ -460,14 +465,14 @@ impl TendonWorkspace {
                             break;
                         }
                     }
-                    if !fresh && self.joint.l2 > policy.hopeless * l2_before {
-                        break;
-                    }
                     if !fresh && evaluated {
                         // a failed chord trial is still a secant pair: Broyden's update
                         // from it, then the new quasi-Newton step from the iterate
-                        // (instead of halving the old one: `chord_retry`)
-                        if !self.joint_chord_retry(n, p) {
+                        // (`joint_chord_retry`); a hopeless one gives way to a fresh
+                        // Jacobian at once
+                        if self.joint.l2 > policy.hopeless * l2_before
+                            || !self.joint_chord_retry(n, p)
+                        {
                             break;
                         }
                         continue;
@@ -527,9 +532,7 @@ impl TendonWorkspace {
         let jb = &mut self.joint;
         jb.f_now.copy_from_slice(&jb.f_prev);
         self.joint_step(n, p);
-        let dx_max = self.joint.dz[..n]
-            .iter()
-            .fold(0.0f64, |m, d| m.max(d.abs()));
+        let dx_max = self.joint.step_max(n);
         dx_max.is_finite() && dx_max <= self.joint.max_step
     }
 
@@ -621,8 +624,8 @@ mod tests {
             }
         }
         assert_ne!(ChordPolicy::ARC, ChordPolicy::CONDENSED);
-        // a full step that does not raise the merit is always backtracked (only one
-        // that raises it past `hopeless` is not); the condensed rules never backtrack
+        // a failed trial that does not raise the merit is always retried (only one
+        // that raises it past `hopeless` is not); the condensed rules never retry
         for policy in [ChordPolicy::ARC, ChordPolicy::CONDENSED] {
             assert!(policy.hopeless > 1.0, "{policy:?}");
         }

@@ -140,7 +140,7 @@ impl TendonWorkspace {
             return false;
         }
         let jb = &mut self.joint;
-        let dx_max = jb.dz[..n].iter().fold(0.0f64, |a, d| a.max(d.abs()));
+        let dx_max = jb.step_max(n);
         if !dx_max.is_finite() || dx_max > jb.max_step {
             self.joint_unswitch();
             return false;
