@@ -45,6 +45,8 @@ mod jacobian;
 mod continuation;
 // An evaluated iterate kept across its trials.
 mod keep;
+// The updated inverse carried over to another active set.
+mod carry;
 
 /// Newton iterations of the joint path before it hands back.
 pub(super) const JOINT_MAX_ITERATIONS: usize = 12;
@@ -76,6 +78,10 @@ pub(super) struct ChordPolicy {
     /// A chord trial that raises the merit more than this factor is not retried: a
     /// fresh Jacobian follows at once.
     hopeless: f64,
+    /// At a row's first iteration: when the iterate's active set differs from the
+    /// one of the reused inverse, carry the inverse over to it (`carry`) and try the
+    /// chord step, instead of a fresh sweep. Measured in `carry`'s module docs.
+    carry: bool,
 }
 
 impl ChordPolicy {
@@ -101,6 +107,7 @@ impl ChordPolicy {
         trials: 1,
         contraction: 0.5,
         hopeless: f64::INFINITY,
+        carry: false,
     };
     /// The arc coupling: an explicit pass is cheap (120 RHS and the disks' rounds)
     /// and a `Dual<15>` sweep is worth ~12 of them, so a chord step is retried
@@ -125,6 +132,7 @@ impl ChordPolicy {
         trials: 3,
         contraction: 0.9,
         hopeless: 3.0,
+        carry: true,
     };
 }
 
@@ -180,6 +188,9 @@ pub(super) struct JointBufs {
     f_prev: Vec<f64>,
     step: Vec<f64>,
     hy: Vec<f64>,
+    /// Scratch `m x m`: the Jacobian `H^-1` while `h` is carried to another active
+    /// set (`carry`).
+    jinv: Vec<f64>,
     /// `s^T W H` of the Broyden update, and its residual change `y`.
     sth: Vec<f64>,
     yv: Vec<f64>,
@@ -255,6 +266,7 @@ impl JointBufs {
             max_step: MAX_STEP,
             lu: DenseLu::new(n + p),
             h: vec![0.0; (n + p) * (n + p)],
+            jinv: vec![0.0; (n + p) * (n + p)],
             f_now: vec![0.0; n + p],
             f_prev: vec![0.0; n + p],
             step: vec![0.0; n + p],
@@ -384,7 +396,12 @@ impl TendonWorkspace {
             // since, when the active set is the same (a "chord" step below); a fresh
             // Jacobian when there is none or the chord step does not
             // contract the merit enough (`ChordPolicy`)
-            let mut chord = self.joint.lu_valid && self.joint.lu_taut == self.taut;
+            // (at a row's start under the arc rules, an inverse made for another active
+            // set is carried over to the iterate's: `carry`)
+            let carry = policy.carry && it == 0;
+            let mut chord = self.joint.lu_valid
+                && (self.joint.lu_taut == self.taut
+                    || (carry && self.joint_carry_to_iterate(n, p)));
             // (a row started from an extrapolated point always tries the chord: on
             // the 443 FTDCR v4 val rows 2 026 -> 2 403 `f64` and 139.2 -> 117.6 dual
             // right-hand sides a row, 12.86 -> 12.76 M instructions; on 5 000 ticks
@@ -630,5 +647,12 @@ mod tests {
             assert!(policy.hopeless > 1.0, "{policy:?}");
         }
         assert_eq!(ChordPolicy::CONDENSED.trials, 1);
+        // the inverse is carried across active sets only on the arc rules
+        for coupling in [CableCoupling::Arc, CableCoupling::Condensed] {
+            for cold in [false, true] {
+                let warm_arc = coupling == CableCoupling::Arc && !cold;
+                assert_eq!(ChordPolicy::of(coupling, cold).carry, warm_arc);
+            }
+        }
     }
 }

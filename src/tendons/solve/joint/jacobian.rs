@@ -4,6 +4,7 @@
 //! step.
 
 use super::super::TendonWorkspace;
+use crate::math::DenseLu;
 
 impl TendonWorkspace {
     /// Exact generalized Jacobian at the current point, factorised.
@@ -47,19 +48,7 @@ impl TendonWorkspace {
                 row[n + i] = c + self.geo[i];
             }
         }
-        jb.lu_valid = matches!(jb.lu.factor(), Some(rc) if rc > 1e-14);
-        if jb.lu_valid {
-            // explicit inverse (m solves; m = n + p is ~15, far below a pass's cost)
-            jb.h.fill(0.0);
-            for k in 0..m {
-                jb.hy.fill(0.0);
-                jb.hy[k] = 1.0;
-                jb.lu.solve_in_place(&mut jb.hy);
-                for r in 0..m {
-                    jb.h[r * m + k] = jb.hy[r];
-                }
-            }
-        }
+        jb.lu_valid = factor_and_invert(&mut jb.lu, &mut jb.h);
         jb.lu_valid
     }
 
@@ -105,6 +94,17 @@ impl TendonWorkspace {
     }
 }
 
+/// Factor the matrix in `lu` and write its explicit inverse to `inv` (`m x m`
+/// row-major, `m = n + p` ~15: far below a pass's cost); `false` when it is
+/// singular (reciprocal pivot ratio at most 1e-14).
+pub(super) fn factor_and_invert(lu: &mut DenseLu, inv: &mut [f64]) -> bool {
+    if !matches!(lu.factor(), Some(rc) if rc > 1e-14) {
+        return false;
+    }
+    lu.inverse_into(inv);
+    true
+}
+
 /// Weight of a tension step (N) against a step of the scaled shooting unknowns in
 /// Broyden's update: `q^2`, `q = MERIT_G_UNIT_M tol / tol_G`, the ratio of the
 /// merit's unit of a tendon mismatch (`MERIT_G_UNIT_M`, what the line search weighs
@@ -136,7 +136,7 @@ fn broyden_weight(tol: f64, tol_g: f64) -> f64 {
 /// `h`, `W` = 1 on the first `n` unknowns and `wt` on the rest; `hy`, `sth` scratch
 /// (`m` each). Skipped when `s^T W H y` is tiny against `s^T W s`. Afterwards
 /// `H y = s` (the secant equation) whatever `W`.
-fn broyden_update(
+pub(super) fn broyden_update(
     h: &mut [f64],
     n: usize,
     wt: f64,
@@ -157,8 +157,14 @@ fn broyden_update(
     if den.abs() <= 1e-12 * ss.max(f64::MIN_POSITIVE) || !den.is_finite() {
         return;
     }
-    for (c, wc) in sth.iter_mut().enumerate() {
-        *wc = (0..m).map(|r| w(r) * s[r] * h[r * m + c]).sum();
+    // sth = s^T W H, row by row (contiguous; per entry the same sum in the same
+    // order as a column's)
+    sth.fill(0.0);
+    for (r, row) in h.chunks_exact(m).enumerate() {
+        let a = w(r) * s[r];
+        for (wc, hc) in sth.iter_mut().zip(row) {
+            *wc += a * hc;
+        }
     }
     for (r, row) in h.chunks_exact_mut(m).enumerate() {
         let u = (s[r] - hy[r]) / den;

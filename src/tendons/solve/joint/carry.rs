@@ -1,0 +1,179 @@
+//! The Broyden-updated inverse carried over to another active set, without a sweep.
+//!
+//! The generalized Jacobian's rows (module docs of `joint`) are the shooting rows,
+//! one taut row `[-dl_i/dx, c_i e_i - dl_i/dT]` per taut tendon and the exact row
+//! `a_i e_i` per slack one. A chord step reuses `H`, the inverse of the last sweep's
+//! Jacobian improved by Broyden's updates since, only while the active set is the
+//! one `H` was made for. When a tendon has switched since (between rows, the usual
+//! case), this recovers the improved Jacobian `J = H^-1` (one `m x m`
+//! factorisation, `m = n + p` ~15), exchanges the switched tendons' rows (a slack
+//! row is exact; a taut row comes from the last sweep's partials, as in
+//! `joint_assemble`) and inverts again: two small factorisations instead of a
+//! sweep (~9 `f64` passes on the FTDCR v4 scene). The chord step from it is tried
+//! like any other, and a fresh sweep follows when it fails.
+//!
+//! Why: on the 443 FTDCR v4 val rows warm (3 laps), half the sweeps (218 of 415)
+//! were taken only because the active set had changed since the last one. Measured
+//! with `examples/tendon_profile` (`f64` / dual RHS a row; pass units `f64` / 120 +
+//! 9.4 x dual / 120, a sweep costing ~9.4 passes), session 29:
+//!
+//! | rows | before | carried at a row's start (kept) | carried at every iteration |
+//! |---|---|---|---|
+//! | val, scene tolerances | 558 / 37.5, 7.59 | 579 / 31.3, 7.28 | 583 / 30.2, 7.22 |
+//! | train | 521 / 27.0, 6.46 | 543 / 21.3, 6.19 | 547 / 20.2, 6.13 |
+//! | val, tolerances 1e-10 / 1e-12 m | 1 076 / 45.8, 12.55 | 1 094 / 39.3, 12.20 | 1 115 / 39.3, 12.37 |
+//!
+//! Cold rows and 1 kHz ticks follow other rules (unchanged). Tried and not kept:
+//! also solving the chord step's own active set on the carried inverse at a row's
+//! start (the primal-dual search of `active_set`): 7.02 on val, 12.07 at the tight
+//! tolerances; but its sign tests on a stale Jacobian made the solves at nearby
+//! parameters take different paths, and the central differences of
+//! `tests/calibrate_exact_sensitivities.rs` (through full solves) moved 9.5e-6 from
+//! the exact sensitivities where the test allows 9.4e-6 (this way: 7.0e-7; before:
+//! 5.7e-7). Carrying at every iteration: 3.3e-6 there.
+
+use super::super::TendonWorkspace;
+use super::jacobian::factor_and_invert;
+
+impl TendonWorkspace {
+    /// Carry the reused inverse `H` (made for the active set `joint.lu_taut`) over
+    /// to the iterate's active set `taut` (module docs). `false` when a
+    /// factorisation is singular; then `joint.lu_valid` is false and a fresh sweep
+    /// follows.
+    pub(super) fn joint_carry_to_iterate(&mut self, n: usize, p: usize) -> bool {
+        let m = n + p;
+        let w = n + self.theta.len();
+        let jb = &mut self.joint;
+        jb.lu.matrix_mut().copy_from_slice(&jb.h);
+        if !factor_and_invert(&mut jb.lu, &mut jb.jinv) {
+            jb.lu_valid = false;
+            return false;
+        }
+        for i in 0..p {
+            if jb.lu_taut[i] == self.taut[i] {
+                continue;
+            }
+            let row = &mut jb.jinv[(n + i) * m..(n + i + 1) * m];
+            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
+            if self.taut[i] {
+                let j = self.driven[i];
+                for (col, v) in row.iter_mut().enumerate() {
+                    *v = -jb.jac_m[j * w + col] + if col == n + i { c } else { 0.0 };
+                }
+            } else {
+                row.fill(0.0);
+                row[n + i] = c + self.geo[i];
+            }
+        }
+        jb.lu_taut.copy_from_slice(&self.taut);
+        jb.lu.matrix_mut().copy_from_slice(&jb.jinv);
+        jb.lu_valid = factor_and_invert(&mut jb.lu, &mut jb.h);
+        jb.lu_valid
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::jacobian::broyden_update;
+    use crate::math::DenseLu;
+    use crate::Scene;
+
+    /// Largest entry of `a - b` against the largest of `b`.
+    fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+        let top = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        a.iter()
+            .zip(b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+            / top
+    }
+
+    /// The inverse of the row-major `m x m` matrix `a`.
+    fn inverse(a: &[f64], m: usize) -> Vec<f64> {
+        let mut lu = DenseLu::new(m);
+        lu.matrix_mut().copy_from_slice(a);
+        assert!(lu.factor().is_some());
+        let mut inv = vec![0.0; m * m];
+        lu.inverse_into(&mut inv);
+        inv
+    }
+
+    /// On the shipped FTDCR v4 scene at a solved row with a slack tendon, to the set
+    /// with the first taut tendon slack and the first slack one taut:
+    /// - from a freshly swept inverse, the carried inverse is the one assembled for
+    ///   that set from the same sweep (1e-9 of its largest entry: two 15 x 15
+    ///   inversions' round-off, condition ~1e4);
+    /// - after a Broyden update, the carried Jacobian keeps the updated one's rows
+    ///   of the shooting residual and of the tendons that kept their branch (1e-9),
+    ///   its new slack row is exactly `a_i e_i` and its new taut row the sweep's.
+    #[test]
+    fn a_carried_inverse_is_the_inverse_of_the_exchanged_rows() {
+        let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
+        let mut tw = scene.tendon_workspace().expect("workspace");
+        let (n, p) = (tw.ws.unknowns(), tw.driven.len());
+        let (m, w) = (n + p, n + tw.theta.len());
+        let mut q = vec![0.0; p];
+        q[0] = 0.002;
+        q[3] = -0.004;
+        assert!(tw.solve_readings(&q).expect("valid").status.is_converged());
+        tw.joint.x.copy_from_slice(tw.ws.unknowns_vector());
+        assert!(tw.joint_evaluate().is_some());
+        assert!(tw.joint_factor());
+        let set0 = tw.joint.lu_taut.clone();
+        let to_slack = set0.iter().position(|&t| t).expect("a taut tendon");
+        let to_taut = set0.iter().position(|&t| !t).expect("a slack tendon");
+        let mut set1 = set0.clone();
+        set1[to_slack] = false;
+        set1[to_taut] = true;
+        // from the sweep's inverse: carried against assembled
+        tw.taut.copy_from_slice(&set1);
+        assert!(tw.joint_carry_to_iterate(n, p));
+        let carried = tw.joint.h.clone();
+        tw.joint.lu_taut.copy_from_slice(&set1);
+        assert!(tw.joint_assemble());
+        let d = rel_diff(&carried, &tw.joint.h);
+        assert!(d < 1e-9, "carried vs assembled: {d:e}");
+        // after a Broyden update whose secant differs from the sweep's Jacobian
+        // (as a nonlinear residual's does) on every row but the slack ones
+        tw.joint.lu_taut.copy_from_slice(&set0);
+        assert!(tw.joint_assemble());
+        let j0 = inverse(&tw.joint.h, m);
+        let s: Vec<f64> = (0..m).map(|k| 0.01 * (k as f64 + 1.0).sin()).collect();
+        let mut y: Vec<f64> = (0..m)
+            .map(|r| (0..m).map(|k| j0[r * m + k] * s[k]).sum())
+            .collect();
+        for (k, yk) in y.iter_mut().enumerate() {
+            if k < n || set0[k - n] {
+                *yk *= 1.0 + 0.05 * (k as f64 + 0.3).cos();
+            }
+        }
+        let (mut hy, mut sth) = (vec![0.0; m], vec![0.0; m]);
+        broyden_update(&mut tw.joint.h, n, 1.0, &s, &y, &mut hy, &mut sth);
+        let updated = inverse(&tw.joint.h, m);
+        assert!(rel_diff(&updated, &j0) > 1e-6, "the update changed nothing");
+        assert!(tw.joint_carry_to_iterate(n, p));
+        assert_eq!(tw.joint.lu_taut, set1);
+        let j1 = inverse(&tw.joint.h, m);
+        for r in 0..m {
+            let row = &j1[r * m..(r + 1) * m];
+            if r == n + to_slack {
+                let i = to_slack;
+                let a = tw.mech[i].compliance(tw.free[i], tw.mean_factor[i]) + tw.geo[i];
+                for (k, v) in row.iter().enumerate() {
+                    let want = if k == r { a } else { 0.0 };
+                    assert!((v - want).abs() < 1e-9 * a, "slack row, column {k}: {v}");
+                }
+            } else if r == n + to_taut {
+                let (i, j) = (to_taut, tw.driven[to_taut]);
+                let c = tw.mech[i].compliance(tw.free[i], tw.mean_factor[i]);
+                let sweep: Vec<f64> = (0..m)
+                    .map(|k| -tw.joint.jac_m[j * w + k] + if k == r { c } else { 0.0 })
+                    .collect();
+                let d = rel_diff(row, &sweep);
+                assert!(d < 1e-9, "taut row: {d:e}");
+            } else {
+                let d = rel_diff(row, &updated[r * m..(r + 1) * m]);
+                assert!(d < 1e-9, "row {r} kept: {d:e}");
+            }
+        }
+    }
+}
