@@ -36,7 +36,7 @@
 //! (`workspace/noise.rs`).
 
 use super::pass::LOCAL_TOL;
-use super::plan::ParamSite;
+use super::plan::{ParamSite, PlanCable};
 use crate::loads::Loads;
 use crate::robot::Robot;
 use crate::settings::{Integrator, SolverSettings};
@@ -46,12 +46,14 @@ use crate::settings::{Integrator, SolverSettings};
 pub(crate) const FLOOR_SAFETY: f64 = 3.0;
 
 /// Round-off floor (dimensionless, like `tolerance`) of the scaled shooting residual for
-/// `loads` plus the load parameters `theta` at `params` on `robot` with `settings`.
+/// `loads` plus the load parameters `theta` at `params` on `robot` with `settings`;
+/// `cables` the plan's cables of `robot` (their shortest chords).
 /// `intensity` is [`super::intensity::load_intensity`] of the same loads.
 pub(crate) fn residual_floor(
     robot: &Robot,
     loads: &Loads,
     settings: &SolverSettings,
+    cables: &[PlanCable],
     params: &[ParamSite],
     theta: &[f64],
     intensity: f64,
@@ -76,20 +78,14 @@ pub(crate) fn residual_floor(
         loads.tension(j).abs() + from_params
     };
     let (mut axial, mut coupling) = (0.0, 0.0);
-    for (j, c) in robot.cables().iter().enumerate() {
+    for (j, c) in cables.iter().enumerate() {
         let t = tension(j);
         if t == 0.0 {
             continue;
         }
         axial += t * length * length / ei;
         // shortest chord of the route: base plate to the first disk, then disk to disk
-        let mut h = f64::INFINITY;
-        let mut s_prev = 0.0;
-        for &g in &c.route {
-            let s = robot.guides()[g].s;
-            h = h.min(s - s_prev);
-            s_prev = s;
-        }
+        let h = c.shortest_chord;
         if h.is_finite() && h > 0.0 {
             coupling += t * length * length / (ei * h);
         }

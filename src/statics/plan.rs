@@ -90,6 +90,10 @@ pub(crate) struct PlanCable {
     /// plate) relative to the actuator's: 1 without friction, the capstan factors
     /// `exp(+-mu theta)` with it ([`crate::tendons`]).
     pub factor: Vec<f64>,
+    /// Shortest chord of the route (m): base plate to the first disk, then disk to
+    /// disk (infinite without disks); the residual floor's coupling term
+    /// (`statics::floor`), gathered once instead of at every evaluation.
+    pub shortest_chord: f64,
     /// Arc coupling ([`Plan::arc`]): per chord from route disk `k` to `k + 1`, the
     /// arc length of the gap (m) and the section whose stiffness it takes (the one
     /// at the gap's midpoint). Empty otherwise.
@@ -377,6 +381,7 @@ impl Plan {
                     .map_or_else(|| c.hole_local[c.route.len() - 1], |p| p.eval(c.end_s)[0]),
                 routed: c.path.is_some(),
                 unknowns,
+                shortest_chord: shortest_chord(robot, &c.route),
                 gap: if arc {
                     c.route
                         .windows(2)
@@ -584,6 +589,19 @@ impl Plan {
         }
         (f, m)
     }
+}
+
+/// Shortest chord (m) of a route of guide indices: base plate (`s = 0`) to the
+/// first disk, then disk to disk; infinite for an empty route.
+fn shortest_chord(robot: &Robot, route: &[usize]) -> f64 {
+    let mut h = f64::INFINITY;
+    let mut s_prev = 0.0;
+    for &g in route {
+        let s = robot.guides()[g].s;
+        h = h.min(s - s_prev);
+        s_prev = s;
+    }
+    h
 }
 
 #[cfg(test)]

@@ -194,6 +194,7 @@ impl Workspace {
             &self.robot,
             &self.loads,
             &self.settings,
+            &self.plan.cables,
             &self.plan.params,
             &self.b64.theta,
             intensity,
