@@ -92,6 +92,11 @@ pub(crate) fn pass<T: Real>(
     debug_assert_eq!(buf.theta.len(), plan.params.len());
     // no guide of this pass has corrected its rounds yet (`arc`)
     buf.arc_corr_g = usize::MAX;
+    if plan.arc {
+        for j in 0..plan.cables.len() {
+            buf.arc_act[j] = event::actuator_tension(plan, buf, j, load_scale);
+        }
+    }
     let mut y = State {
         r: v3::<T>(&plan.base_r),
         rot: plan.base_rot.map(T::cst),

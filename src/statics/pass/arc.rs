@@ -43,7 +43,7 @@
 //! use the integrated holes, as with every coupling. Measured against `condensed` in
 //! `tests/arc_coupling.rs`.
 
-use super::{actuator_tension, unit, v3, PassBuf};
+use super::{unit, v3, PassBuf};
 use crate::integrate::{Coeffs, State};
 use crate::math::{cross, fma, mat_t_vec, mat_vec, mat_vec_f64, Dual, Real};
 #[cfg(doc)]
@@ -316,13 +316,7 @@ fn round_chained<T: Real>(
 
 /// The chords of guide `g` under the arc coupling: records the holes, applies the
 /// jump of `(n, m)` of every tensioned cable's chords to `y`.
-pub(super) fn guide_chords<T: Real>(
-    plan: &Plan,
-    g: usize,
-    y: &mut State<T>,
-    buf: &mut PassBuf<T>,
-    load_scale: f64,
-) {
+pub(super) fn guide_chords<T: Real>(plan: &Plan, g: usize, y: &mut State<T>, buf: &mut PassBuf<T>) {
     let z = Vector3::new(T::zero(), T::zero(), T::zero());
     // the chords back to the previous holes: fixed
     let (mut jn, mut jm) = (z, z);
@@ -339,7 +333,7 @@ pub(super) fn guide_chords<T: Real>(
         if !c.tensioned {
             continue;
         }
-        let t_act = actuator_tension(plan, buf, j, load_scale);
+        let t_act = buf.arc_act[j];
         let t = t_act.scale(c.factor[k]);
         let prev = if k == 0 {
             v3::<T>(&c.base_hole)

@@ -91,6 +91,10 @@ pub(crate) struct PassBuf<T: Real> {
     /// Arc coupling: the tension of each cable's chord on from the current disk (N),
     /// computed once per disk for the rounds of `arc::guide_chords`.
     pub(in crate::statics::pass) arc_t: Vec<T>,
+    /// Arc coupling: each cable's actuator tension (N) for this pass
+    /// (`actuator_tension` at the pass's load scale), set at the pass's start so
+    /// that a disk reads it instead of assembling it for every cable through it.
+    pub(in crate::statics::pass) arc_act: Vec<T>,
     /// Arc coupling: what the rounds of the last two guides of this pass changed of
     /// their first guess (chords on, force and moment in each guide's frame), newest
     /// first, and the guide of the newest (`usize::MAX`: none yet).
@@ -175,6 +179,7 @@ impl<T: Real> PassBuf<T> {
             lengths: vec![T::zero(); plan.cables.len()],
             lengths_ck: vec![T::zero(); plan.cables.len()],
             arc_t: vec![T::zero(); if plan.arc { plan.cables.len() } else { 0 }],
+            arc_act: vec![T::zero(); if plan.arc { plan.cables.len() } else { 0 }],
             arc_corr: [(z, z); 2],
             arc_corr_g: usize::MAX,
             rhs_evals: 0,

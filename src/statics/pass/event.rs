@@ -57,7 +57,7 @@ pub(super) fn apply_event<T: Real>(
                 y.n -= v3::<T>(&(plan.gravity * (plan.guide_mass[g] * load_scale)));
             }
             if plan.arc {
-                arc::guide_chords(plan, g, y, buf, load_scale);
+                arc::guide_chords(plan, g, y, buf);
                 return;
             }
             for &(j, k) in &plan.guide_cables[g] {
