@@ -176,6 +176,7 @@ impl DenseLu {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
     /// The row-wise inverse is the column solves' bit for bit (same operations in
     /// the same order per column), and `A A^-1 = I` to 1e-13, on a system that
@@ -208,7 +209,6 @@ mod tests {
             }
         }
     }
-    use super::*;
 
     #[test]
     fn solves_a_pivoting_system() {

@@ -111,9 +111,10 @@ impl ChordPolicy {
     };
     /// The arc coupling: an explicit pass is cheap (120 RHS and the disks' rounds)
     /// and a `Dual<15>` sweep is worth ~12 of them, so a chord step is retried
-    /// before it gives way (halved until session 28, now `joint_chord_retry`), and every row tries it first. On the 443 FTDCR v4 val
-    /// rows warm (`examples/tendon_profile`, `COUPLING=arc`), `f64` / dual RHS a row
-    /// and callgrind instructions: the condensed policy 950 / 97.2, 1.322e9; this
+    /// before it gives way (halved until session 28, now `joint_chord_retry`), and
+    /// every row tries it first. On the 443 FTDCR v4 val rows warm
+    /// (`examples/tendon_profile`, `COUPLING=arc`), `f64` / dual RHS a row and
+    /// callgrind instructions: the condensed policy 950 / 97.2, 1.322e9; this
     /// one 1 215 / 46.3, 1.132e9 (-14 %). Neighbours, measured with a scratch build
     /// that read the rules from the environment (this one there: 1.141e9): 2 trials
     /// and 0.99, 1 131 / 54.4, 1.144e9; 3 and 0.99, 1 233 / 47.7, 1.156e9; 4 and

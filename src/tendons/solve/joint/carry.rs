@@ -7,8 +7,8 @@
 //! one `H` was made for. When a tendon has switched since (between rows, the usual
 //! case), this recovers the improved Jacobian `J = H^-1` (one `m x m`
 //! factorisation, `m = n + p` ~15), exchanges the switched tendons' rows (a slack
-//! row is exact; a taut row comes from the last sweep's partials, as in
-//! `joint_assemble`) and inverts again: two small factorisations instead of a
+//! row is exact; a taut row comes from the last sweep's partials: `tendon_row`, as
+//! in `joint_assemble`) and inverts again: two small factorisations instead of a
 //! sweep (~9 `f64` passes on the FTDCR v4 scene). The chord step from it is tried
 //! like any other, and a fresh sweep follows when it fails.
 //!
@@ -33,7 +33,7 @@
 //! 5.7e-7). Carrying at every iteration: 3.3e-6 there.
 
 use super::super::TendonWorkspace;
-use super::jacobian::factor_and_invert;
+use super::jacobian::{factor_and_invert, tendon_row};
 
 impl TendonWorkspace {
     /// Carry the reused inverse `H` (made for the active set `joint.lu_taut`) over
@@ -54,16 +54,10 @@ impl TendonWorkspace {
                 continue;
             }
             let row = &mut jb.jinv[(n + i) * m..(n + i + 1) * m];
+            let j = self.driven[i];
             let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
-            if self.taut[i] {
-                let j = self.driven[i];
-                for (col, v) in row.iter_mut().enumerate() {
-                    *v = -jb.jac_m[j * w + col] + if col == n + i { c } else { 0.0 };
-                }
-            } else {
-                row.fill(0.0);
-                row[n + i] = c + self.geo[i];
-            }
+            let sweep_row = &jb.jac_m[j * w..j * w + m];
+            tendon_row(row, n + i, self.taut[i], sweep_row, c, self.geo[i]);
         }
         jb.lu_taut.copy_from_slice(&self.taut);
         jb.lu.matrix_mut().copy_from_slice(&jb.jinv);

@@ -33,20 +33,10 @@ impl TendonWorkspace {
         }
         for i in 0..p {
             let row = &mut a[(n + i) * m..(n + i + 1) * m];
-            let mech = &self.mech[i];
-            let c = mech.compliance(self.free[i], self.mean_factor[i]);
-            if jb.lu_taut[i] {
-                let j = self.driven[i];
-                for (col, v) in row[..n].iter_mut().enumerate() {
-                    *v = -jb.jac_m[j * w + col];
-                }
-                for k in 0..p {
-                    row[n + k] = -jb.jac_m[j * w + n + k] + if k == i { c } else { 0.0 };
-                }
-            } else {
-                row.fill(0.0);
-                row[n + i] = c + self.geo[i];
-            }
+            let j = self.driven[i];
+            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
+            let sweep_row = &jb.jac_m[j * w..j * w + m];
+            tendon_row(row, n + i, jb.lu_taut[i], sweep_row, c, self.geo[i]);
         }
         jb.lu_valid = factor_and_invert(&mut jb.lu, &mut jb.h);
         jb.lu_valid
@@ -91,6 +81,29 @@ impl TendonWorkspace {
             *y = a - b;
         }
         broyden_update(&mut jb.h, n, wt, &jb.step, &jb.yv, &mut jb.hy, &mut jb.sth);
+    }
+}
+
+/// Row `r` (= `n + i`) of the generalized Jacobian for tendon `i` (module docs of
+/// `joint`): taut, `[-dl_i/dx, c_i e_i - dl_i/dT]` from the sweep's row `sweep_row`
+/// of `d l_i / d[x; T]` (its first `m` columns) and the compliance `c`; slack, the
+/// exact `(c + geo) e_i`.
+pub(super) fn tendon_row(
+    row: &mut [f64],
+    r: usize,
+    taut: bool,
+    sweep_row: &[f64],
+    c: f64,
+    geo: f64,
+) {
+    if taut {
+        for (v, s) in row.iter_mut().zip(sweep_row) {
+            *v = -s;
+        }
+        row[r] += c;
+    } else {
+        row.fill(0.0);
+        row[r] = c + geo;
     }
 }
 
