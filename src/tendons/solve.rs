@@ -103,10 +103,12 @@ pub struct TendonWorkspace {
     lu: DenseLu,
     /// `sens` is from the current point (else from an earlier one: chord steps).
     sens_fresh: bool,
-    /// Friction: `mu`, deadband, per-tendon direction (-1 pulled in, +1 paid out, 0
-    /// at rest), last readings, factor scratch and length-weighted mean factor.
+    /// Friction: `mu`, the law (deadband or slide length), per-tendon direction
+    /// state (-1 pulled in, +1 paid out, 0 at rest, between while turning round
+    /// under the pre-sliding law), last readings, factor scratch and length-weighted
+    /// mean factor.
     mu: f64,
-    deadband: f64,
+    friction: Option<crate::tendons::FrictionSpec>,
     sign: Vec<f64>,
     last_q: Vec<f64>,
     factors: Vec<Vec<f64>>,
@@ -197,7 +199,7 @@ impl TendonWorkspace {
         let nc = robot.cables().len();
         let routes: Vec<usize> = robot.cables().iter().map(|c| c.route.len()).collect();
         let mu = robot.friction_mu();
-        let deadband = robot.spec().friction.as_ref().map_or(0.0, |f| f.deadband_m);
+        let friction = robot.spec().friction.clone();
         let ws = Workspace::with_params(robot, loads, settings, &params)?;
         let p = driven.len();
         let np = params.len();
@@ -222,7 +224,7 @@ impl TendonWorkspace {
             lu: DenseLu::new(p),
             sens_fresh: false,
             mu,
-            deadband,
+            friction,
             sign: vec![0.0; p],
             last_q: vec![0.0; p],
             factors: driven.iter().map(|&j| vec![1.0; routes[j]]).collect(),
@@ -339,7 +341,8 @@ impl TendonWorkspace {
     pub fn lengths(&self) -> &[f64] {
         &self.lengths
     }
-    /// Friction direction of each driven tendon (-1 pulled in, +1 paid out, 0 rest).
+    /// Friction direction state of each driven tendon (-1 pulled in, +1 paid out, 0
+    /// rest; in between while turning round under `robot.friction.slide_m`).
     pub fn friction_direction(&self) -> &[f64] {
         &self.sign
     }
@@ -407,13 +410,17 @@ impl TendonWorkspace {
         for (i, reading) in readings_m.iter().enumerate() {
             let q = reading - self.mech[i].zero_offset_m;
             self.free[i] = self.free0[i] - q;
-            // friction direction: the way the tendon last moved beyond the deadband
+            // friction direction state: the way the tendon last moved (`FrictionSpec::next_direction`)
             let dq = q - self.last_q[i];
-            if self.mu > 0.0 && dq.abs() > self.deadband {
-                self.sign[i] = if dq > 0.0 { -1.0 } else { 1.0 };
-            }
-            if self.mu == 0.0 || dq.abs() > self.deadband {
-                self.last_q[i] = q;
+            match &self.friction {
+                Some(f) if self.mu > 0.0 => {
+                    let (s, moved) = f.next_direction(self.sign[i], dq);
+                    self.sign[i] = s;
+                    if moved {
+                        self.last_q[i] = q;
+                    }
+                }
+                _ => self.last_q[i] = q,
             }
         }
         let start = if self.has_solution {

@@ -133,17 +133,118 @@ pub struct FrictionSpec {
     /// (so encoder noise does not flip the friction). Default 1e-5.
     #[serde(default = "default_deadband")]
     pub deadband_m: f64,
+    /// Slide length (m) over which a tendon's friction turns round after it reverses
+    /// (a first-order, Dahl-type pre-sliding law): each reading change `dq` moves the
+    /// direction state `s` (in `[-1, 1]`, -1 pulled in, +1 paid out) towards
+    /// `-sign(dq)` by the factor `1 - exp(-|dq| / slide_m)`, and the capstan factor
+    /// per hole is `exp(s mu theta)`. Physically the elastic stretch a tendon takes
+    /// before its contact points slip (of the order of `T L / EA`). Absent: the
+    /// switching law (the direction flips at once beyond `deadband_m`), which makes
+    /// the model non-smooth in the readings and in the parameters that shift them;
+    /// with `slide_m` the model is continuous in both, so a least-squares fit can use
+    /// its sensitivities. When set, `deadband_m` is not used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slide_m: Option<f64>,
+}
+
+impl FrictionSpec {
+    /// The direction state after a reading change `dq` (m) from state `s`: the
+    /// switching law (`slide_m` absent: -1 pulled in, +1 paid out once `|dq|`
+    /// exceeds the deadband, else unchanged) or the smooth pre-sliding law
+    /// ([`FrictionSpec::slide_m`]). Returns the new state and whether the reading
+    /// counts as a move (the switching law keeps its last reading below the
+    /// deadband, so slow creeps still add up).
+    pub fn next_direction(&self, s: f64, dq: f64) -> (f64, bool) {
+        match self.slide_m {
+            Some(slide) => {
+                if dq == 0.0 {
+                    return (s, true);
+                }
+                let target = if dq > 0.0 { -1.0 } else { 1.0 };
+                (target + (s - target) * (-dq.abs() / slide).exp(), true)
+            }
+            None => {
+                if dq.abs() > self.deadband_m {
+                    (if dq > 0.0 { -1.0 } else { 1.0 }, true)
+                } else {
+                    (s, false)
+                }
+            }
+        }
+    }
+
+    /// Check the numbers.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        ModelError::non_negative("robot.friction.mu", self.mu)?;
+        ModelError::non_negative("robot.friction.deadband_m", self.deadband_m)?;
+        if let Some(slide) = self.slide_m {
+            if slide.is_nan() || slide <= 0.0 || slide.is_infinite() {
+                return Err(ModelError::NonPositive {
+                    field: "robot.friction.slide_m".into(),
+                    value: slide,
+                });
+            }
+        }
+        Ok(())
+    }
 }
 
 fn default_deadband() -> f64 {
     1e-5
 }
 
-impl FrictionSpec {
-    /// Check the numbers.
-    pub fn validate(&self) -> Result<(), ModelError> {
-        ModelError::non_negative("robot.friction.mu", self.mu)?;
-        ModelError::non_negative("robot.friction.deadband_m", self.deadband_m)?;
-        Ok(())
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn law(slide_m: Option<f64>) -> FrictionSpec {
+        FrictionSpec {
+            mu: 0.1,
+            deadband_m: 1e-5,
+            slide_m,
+        }
+    }
+
+    #[test]
+    fn the_switching_law_flips_beyond_the_deadband_only() {
+        let f = law(None);
+        assert_eq!(f.next_direction(0.0, 2e-5), (-1.0, true));
+        assert_eq!(f.next_direction(-1.0, -2e-5), (1.0, true));
+        // below the deadband: unchanged, and the reading is not taken as a move
+        assert_eq!(f.next_direction(-1.0, 5e-6), (-1.0, false));
+    }
+
+    #[test]
+    fn the_pre_sliding_law_turns_round_continuously() {
+        let slide = 2e-4;
+        let f = law(Some(slide));
+        // pulled in from rest by one slide length: 1 - 1/e of the way to -1
+        let (s, moved) = f.next_direction(0.0, slide);
+        assert!(moved);
+        assert!((s + 1.0 - (-1.0f64).exp()).abs() < 1e-15, "{s}");
+        // continuous in dq at a reversal: tiny moves either way barely change s
+        let (up, _) = f.next_direction(-1.0, 1e-12);
+        let (down, _) = f.next_direction(-1.0, -1e-12);
+        assert!(
+            (up + 1.0).abs() < 1e-12 && (down + 1.0).abs() < 1e-7,
+            "{up} {down}"
+        );
+        // a long move settles on the moving direction; the state stays in [-1, 1]
+        let (s, _) = f.next_direction(-1.0, -50.0 * slide);
+        assert!((s - 1.0).abs() < 1e-12 && s <= 1.0);
+        // two steps equal one step of their sum (the law is exact, not a time step)
+        let (a, _) = f.next_direction(0.3, 1e-4);
+        let (b, _) = f.next_direction(a, 2e-4);
+        let (c, _) = f.next_direction(0.3, 3e-4);
+        assert!((b - c).abs() < 1e-14, "{b} {c}");
+    }
+
+    #[test]
+    fn a_slide_length_must_be_positive_and_finite() {
+        for bad in [0.0, -1e-4, f64::NAN, f64::INFINITY] {
+            let e = law(Some(bad)).validate().unwrap_err().to_string();
+            assert!(e.contains("robot.friction.slide_m"), "{e}");
+        }
+        assert!(law(Some(1e-4)).validate().is_ok());
     }
 }
