@@ -20,6 +20,7 @@ mod auto_readings;
 mod bad_input_catalogue;
 mod calibrate_cli;
 mod calibrate_conditioning;
+mod calibrate_crossval;
 mod calibrate_exact_sensitivities;
 mod calibrate_failed_rows;
 mod calibrate_identifiability;

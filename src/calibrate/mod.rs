@@ -21,6 +21,7 @@
 //! Units: SI (m, N, kg, rad); a recording's mm columns are converted on reading.
 
 pub mod conditioning;
+mod crossval;
 mod fit;
 mod frame;
 mod identify;
@@ -37,6 +38,7 @@ mod spec;
 mod stats;
 
 pub use conditioning::{Conditioning, InputTimeline, ReadingsHistory, MAX_GAP_S};
+pub use crossval::{cross_validate, parse_families, row_labels, CrossValidation, Folds, HeldOut};
 pub use fit::{
     CalibrationReport, CalibrationSettings, FailedRow, FitParam, FittedParam, FrameSetup, Progress,
     RowResult, RowWork, RowsProgress, Split, Stage,

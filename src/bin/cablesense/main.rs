@@ -2,6 +2,7 @@
 //! continuum robots. See the README for the commands and file formats.
 
 mod calibrate;
+mod crossval;
 mod demo;
 mod estimate;
 mod output;
@@ -37,6 +38,8 @@ enum Command {
     Validate(validate::Args),
     /// Fit named scene parameters to observed or predicted table columns.
     Calibrate(Box<calibrate::Args>),
+    /// Grouped cross-validation of candidate calibrations on a training recording.
+    Crossval(crossval::Args),
     /// Estimate loads and shape from a file of cable length changes.
     Estimate(estimate::Args),
     /// Streaming estimation: encoder rows in (stdin or --input), JSON lines out.
@@ -58,6 +61,7 @@ fn main() -> std::process::ExitCode {
         Command::Solve(a) => solve::run(a),
         Command::Validate(a) => validate::run(a),
         Command::Calibrate(a) => calibrate::run(*a),
+        Command::Crossval(a) => crossval::run(a),
         Command::Estimate(a) => estimate::run(a),
         Command::Track(a) => track::run(a),
         Command::Pareto(a) => pareto::run(a),
