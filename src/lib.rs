@@ -13,6 +13,7 @@ pub mod loads;
 pub mod math;
 pub mod robot;
 pub mod rod;
+pub mod scene;
 pub mod settings;
 pub mod statics;
 pub mod tendons;
@@ -22,9 +23,9 @@ pub use nalgebra;
 
 pub use cables::CableLength;
 pub use error::ModelError;
-pub use files::{Scene, SceneError};
 pub use loads::{Frame, Loads, PointLoad};
 pub use robot::{Robot, RobotSpec};
 pub use rod::{CrossSection, Material};
+pub use scene::{Scene, SceneError};
 pub use settings::{CableCoupling, GuideMass, Integrator, RodModel, SolverSettings};
 pub use statics::{solve, Pose, Sample, Solution, SolveReport, SolveStatus, Start, Workspace};

@@ -43,28 +43,17 @@
 //! Everything is generic over [`Real`], so dual passes give exact Jacobians, tension
 //! parameters included.
 
-use super::pass::PassBuf;
-use super::plan::{Interval, Plan};
+use super::PassBuf;
 use crate::integrate::{
     dp45_step_with, rk4_step_with, Coeffs, Dp45Outcome, ErrScale, State, DP45_B, DP45_C, RK4_B,
     RK4_C,
 };
 use crate::math::{mat_skew, mat_t_vec, mat_vec, Real};
-use crate::robot::TendonPath;
+use crate::statics::plan::{Interval, Plan, RoutedCable};
 use nalgebra::Vector3;
 
 /// Continuous tendons active on one interval that the fixed-size buffers hold.
 pub(crate) const MAX_ROUTED: usize = 16;
-
-/// One continuously routed cable as the plan sees it.
-#[derive(Clone, Debug)]
-pub(crate) struct RoutedCable {
-    /// Index into `robot.cables`.
-    pub cable: usize,
-    pub path: TendonPath,
-    /// Arc length where it ends (m).
-    pub end_s: f64,
-}
 
 /// The continuous tendons over one interval, with their tensions (load scale applied).
 pub(crate) struct Active<T: Real> {
