@@ -97,7 +97,7 @@ impl Default for Integrator {
 /// The two tolerances (this `tolerance_m` and [`SolverSettings::tolerance`]) are the
 /// user's accuracy choice. The defaults solve to round-off; a control loop can loosen
 /// both: what each pair costs and how far it moves the tips on the FTDCR v4 recording
-/// is in the README's paragraph on the two tolerances (measured with
+/// is in the paragraph on the two tolerances of docs/tendons.md (measured with
 /// `examples/tendon_profile`, asserted in `tests/tendon_tolerance.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

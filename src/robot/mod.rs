@@ -1,6 +1,6 @@
 //! Robot layer: sections, guide disks, cables and the base pose, validated once.
 //!
-//! Conventions (also in the README): every section's backbone runs along its local
+//! Conventions (also in `docs/conventions.md`): every section's backbone runs along its local
 //! `+z` axis (thesis 2.5: the rod "extends along the z axis"); guide disks lie in the
 //! local `xy` plane (thesis 3.8.1 says "yz", which cannot be perpendicular to a rod
 //! along z: a typo); hole angles are measured in that plane from local `+x` towards

@@ -4,7 +4,7 @@
 //! named by the scene field a user would change.
 //!
 //! The intensity is the measure the solver itself decides with (the branch guard's
-//! checks above 3, multiple shooting above 20: README "Large loads"). A load of
+//! checks above 3, multiple shooting above 20: docs/where-methods-fail.md, "Large loads"). A load of
 //! intensity far above a few radians admits looped and inverted equilibria, and a
 //! cold solve from the straight rod may not reach the one the robot takes; a failed
 //! solve at a low intensity is a numerical matter instead (the integrator or the

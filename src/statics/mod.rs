@@ -75,7 +75,7 @@ pub struct SolveReport {
     /// Tolerance the solve used (-): `settings.tolerance`, raised to the round-off
     /// floor of the residual for this robot, integrator and load when it is below it,
     /// and (condensed coupling) to 3 times the settle noise measured between two
-    /// evaluations of the same unknowns (README `[numerics]`, "Tolerance floor").
+    /// evaluations of the same unknowns (docs/scene-format.md, `[numerics]`, "Tolerance floor").
     /// `Converged` exactly when `residual <= tolerance`.
     pub tolerance: f64,
     /// ODE right-hand-side evaluations, counting each dual pass once per evaluation.

@@ -34,7 +34,7 @@
 //! 3 x 3 block is solved and `n' = -f - R (G u' + a)`.
 //! Where tendon `i` ends (`s_e`, a section end) it pulls the rod at `p_i(s_e)` with
 //! `F = -tau_i R h(s_e-)` (RW eqs. 18-20): `n(s+) = n(s-) - F`,
-//! `m(s+) = m(s-) - (R r_i) x F` (the README's jump convention). It is applied right
+//! `m(s+) = m(s-) - (R r_i) x F` (the jump convention of docs/conventions.md). It is applied right
 //! after the interval ending at `s_e` is integrated, before any other event there,
 //! so `h` uses the strains just proximal to the end plate.
 //!
