@@ -8,11 +8,10 @@
 //! intensity far above a few radians admits looped and inverted equilibria, and a
 //! cold solve from the straight rod may not reach the one the robot takes; a failed
 //! solve at a low intensity is a numerical matter instead (the integrator or the
-//! iteration budget), and the diagnosis says which case it is.
-//!
-//! Before (session 26): a tension of 500 N on the demo scene's cable (below the
-//! rod's `EA`, so valid input) ended `max_iterations` after 105 ms with a tip printed
-//! as if it were a result and no reason given.
+//! iteration budget), and the diagnosis says which case it is. Why: a tension of
+//! 500 N on the demo scene's cable (below the rod's `EA`, so valid input) ends
+//! `max_iterations` after about 100 ms, and the status alone gives a user no reason
+//! to act on.
 
 use super::intensity::{intensity_of, intensity_terms, IntensitySource};
 use super::{SolveReport, SolveStatus, Workspace};

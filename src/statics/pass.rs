@@ -175,7 +175,7 @@ pub(crate) fn pass<T: Real>(
                         let h = (iv.s1 - iv.s0) / iv.steps as f64;
                         // Two loops, not a branch per step: with the routed step as an
                         // alternative inside one loop, the plain step's state went through
-                        // memory (a memcpy per step; `forward_warm` +20 %, session 7).
+                        // memory (a memcpy per step; `forward_warm` +20 %).
                         match &act {
                             Some(a) => {
                                 for k in 0..iv.steps {

@@ -59,7 +59,7 @@ use nalgebra::{Matrix3, Vector3};
 /// the value (a `Dual<1>`: the same value arithmetic as an `f64`), and the chain rule
 /// ([`Real::chain`]) gives every direction with one product each, instead of a
 /// dozen dual operations per function (a `Dual<15>` sweep on the FTDCR v4 val rows:
-/// benches/README.md, session 28).
+/// benches/README.md).
 #[inline]
 fn exp_coefficients<T: Real>(x2: T) -> (T, T, T) {
     if T::DIRS == 0 {
@@ -254,7 +254,7 @@ fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
 /// same values), and each output's directions are its six partials times the
 /// inputs' directions plus, per chord, `d / |d|` (and `rho x d / |d|`) times the
 /// tension's. A `Dual<15>` sweep on the FTDCR v4 val rows: 3.9 % fewer instructions
-/// (benches/README.md, session 28). Not inlined: inlined into `guide_chords` the
+/// (benches/README.md). Not inlined: inlined into `guide_chords` the
 /// sweep took 1.6 % more instructions than this way.
 #[inline(never)]
 fn round_chained<T: Real>(
@@ -410,7 +410,7 @@ mod tests {
     /// warm from the servo readings of the 443 val rows: the tips with 2 rounds
     /// from the carried start (the scene's `arc_rounds`) lie as close to the tips of
     /// the rounds' fixed point (40 rounds from the mirrored chords, no carry) as those
-    /// of 3 rounds from the mirrored chords alone (the coupling before session 25),
+    /// of 3 rounds from the mirrored chords alone (the coupling without the carry),
     /// by the mean and by the largest distance; 2 rounds from the mirrored chords lie
     /// several times farther. One round from the carried start converges on every row
     /// within 0.1 mm on average. Measured: mean / max 6.7 / 60 um carried, 7.0 / 91 um

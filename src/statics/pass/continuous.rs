@@ -259,7 +259,7 @@ fn field<T: Real>(
 /// Solve `k x = rhs` in place for a symmetric positive definite `N x N` matrix
 /// (`L D L^T` without pivoting). `N` is a constant (6 for the Cosserat rod, 3 for the
 /// Kirchhoff rod) so the loops unroll: with a runtime size this solve was 45 % of a
-/// routed RHS evaluation (callgrind on `till_warm_ramp`, session 7).
+/// routed RHS evaluation (callgrind on `till_warm_ramp`).
 // index loops over a symmetric matrix read the lower triangle of other rows
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
