@@ -122,9 +122,9 @@ impl Loads {
     /// A point force must stay below the axial stiffness `EA` of every section
     /// between the base and the section it acts on (each carries it): a force of `EA`
     /// along the axis is an axial strain of magnitude 1 (pressed to zero length, or
-    /// stretched to twice its length), as for the tensions and the weight. Before
-    /// (session 26), a tip force of this size was valid input and ended in a
-    /// non-convergence status without a reason. Allocation-free when it passes.
+    /// stretched to twice its length), as for the tensions and the weight: a force of
+    /// this size, if accepted, ends in a non-convergence status without a reason.
+    /// Allocation-free when it passes.
     fn check_point_forces(&self, robot: &Robot) -> Result<(), ModelError> {
         let sections = robot.sections();
         for (i, p) in self.point.iter().enumerate() {

@@ -97,7 +97,7 @@ impl Default for Integrator {
 /// The two tolerances (this `tolerance_m` and [`SolverSettings::tolerance`]) are the
 /// user's accuracy choice. The defaults solve to round-off; a control loop can loosen
 /// both: what each pair costs and how far it moves the tips on the FTDCR v4 recording
-/// is in the README's paragraph on the two tolerances (measured with
+/// is in the paragraph on the two tolerances of docs/tendons.md (measured with
 /// `examples/tendon_profile`, asserted in `tests/tendon_tolerance.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -216,9 +216,23 @@ pub struct SolverSettings {
     pub tendons: TendonSettings,
 }
 
+/// Default rounds of "predict the next holes from the jump of the last round" at a
+/// disk ([`SolverSettings::arc_rounds`], read by the arc coupling of
+/// `statics::pass::arc`; the carried start gives the first jump). On
+/// the 443 FTDCR v4 val rows, solved warm, tips against those of the rounds' fixed
+/// point (40 rounds): from the mirrored chords alone (the predictor the carried start replaced) 2 rounds 32
+/// um mean (max 0.34 mm), 3 rounds 7.0 um (max 91 um); from the carried start 1
+/// round 39 um (max 0.27 mm; the last correction alone: extrapolating one round's
+/// unconverged corrections gave 215 um), 2 rounds 6.7 um (max 60 um), 3 rounds 0.66
+/// um (max 5.3 um). The fixed point is 3.3 um (max 25 um) from the condensed
+/// coupling: the arc's own error. Callgrind instructions of those warm rows
+/// (`examples/tendon_profile`): 3 rounds mirrored 0.932e9, carried 2 rounds 0.836e9,
+/// 1 round 0.693e9.
+pub(crate) const ARC_ROUNDS: usize = 3;
+
 /// `arc_rounds` at its default (a scene then leaves it out).
 fn is_default_arc_rounds(n: &usize) -> bool {
-    *n == crate::statics::ARC_ROUNDS
+    *n == ARC_ROUNDS
 }
 
 impl Default for SolverSettings {
@@ -232,7 +246,7 @@ impl Default for SolverSettings {
             continuation: true,
             max_continuation_steps: 32,
             cable_coupling: CableCoupling::default(),
-            arc_rounds: crate::statics::ARC_ROUNDS,
+            arc_rounds: ARC_ROUNDS,
             branch_guard: true,
             tendons: TendonSettings::default(),
         }

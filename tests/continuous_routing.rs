@@ -1,4 +1,4 @@
-//! Continuous tendon routing (Rucker & Webster 2011, `src/statics/continuous.rs`):
+//! Continuous tendon routing (Rucker & Webster 2011, `src/statics/pass/continuous.rs`):
 //! Till's example robot, the disk model's convergence to it, the constant-curvature
 //! closed form of a straight tendon, a helical tendon against an independent
 //! integration, exact Jacobians, and bad scene fields.

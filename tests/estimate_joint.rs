@@ -87,7 +87,7 @@ fn check_joint(
     );
     let res = equilibrium_residual(est.workspace());
     // the solve's tolerance: the settings' value raised to the round-off floor of
-    // the residual for this robot and load (README `[numerics]`, issue 14)
+    // the residual for this robot and load (docs/scene-format.md, `[numerics]`, issue 14)
     let ws = est.workspace();
     let ftol = ws.settings().tolerance.max(ws.residual_floor());
     prop_assert!(

@@ -30,7 +30,7 @@ fn settings_are_validated() {
 /// Lateral tip force on the track demo: 22 forward rows (CC and PCC cold/warm, six rod
 /// settings cold/warm/continuation) and 4 estimation methods, 17 magnitudes each (to
 /// `P L^2/EI` = 1000); the default rod solve (continuation) stays on the reference
-/// branch to the end of the axis, 1000 (README, "Where methods fail"), CC never (it
+/// branch to the end of the axis, 1000 (docs/where-methods-fail.md), CC never (it
 /// ignores gravity), LM to 40.
 #[test]
 fn lateral_map_of_the_track_demo() {

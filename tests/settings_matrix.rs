@@ -12,14 +12,14 @@
 //! factor scales gravity and a servo reading of 2 mm on the first tendon of every
 //! segment (the others at 0), solved from cold by `TendonWorkspace`.
 //!
-//! Claims ([`CLAIMS`], the README's "Settings matrix" table): every combination
+//! Claims ([`CLAIMS`], the table of docs/settings-matrix.md): every combination
 //! converges cold (status `converged`, finite tip) at every load factor up to the
 //! scene's claimed one, and beyond it each solve "fails cleanly": either `converged`
 //! with a finite tip and a residual within the reported tolerance, or a failure status;
 //! never a panic. Tolerance: the solver's own (`converged` means residual <= the
 //! reported tolerance); source: this matrix's own full sweep, run with
 //! `cargo test --release --test integration settings_matrix:: -- --ignored --nocapture`
-//! (it prints the table the README's is written from). On 2 busy shared cores, with
+//! (it prints the table docs/settings-matrix.md is written from). On 2 busy shared cores, with
 //! `SETTINGS_MATRIX_LAMBDAS=0.25,0.5,1,2`, the thesis scenes, the track demo and the
 //! two-section demo took 8 minutes, `ftdcr_v4` 1 minute; `tdcr_modeling` spends 6 s
 //! per exact solve at factor 1. `tdcr_two_segment` (session 10, 2026-11-27, with the
@@ -42,7 +42,7 @@ const SWEEP: [f64; 7] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
 
 /// Claimed load factor per scene, with continuation on and off: every combination
 /// converges cold at every factor of the sweep up to this one. Written from the
-/// measured sample (see the README's "Settings matrix"); the full sweep checks them
+/// measured sample (see docs/settings-matrix.md); the full sweep checks them
 /// on all 128 (64) combinations.
 const CLAIMS: [(&str, f64, f64); 12] = [
     ("scenes/demo_two_section.toml", 2.0, 0.5),
@@ -423,7 +423,7 @@ fn thesis_scenes() {
 
 /// The full sweep: every combination at every factor of [`SWEEP`]; prints, per scene
 /// and combination, the largest factor up to which every solve converged, and the
-/// summary the README's table is written from; asserts the claims and clean failures.
+/// summary the table of docs/settings-matrix.md is written from; asserts the claims and clean failures.
 /// `SETTINGS_MATRIX_SCENE=track` restricts it to scenes whose name contains `track`.
 #[test]
 #[ignore = "the full matrix: an hour or more on 2 shared cores (see the module docs)"]

@@ -1,4 +1,4 @@
-//! The documented stability region (README "Where methods fail", measured by
+//! The documented stability region (docs/where-methods-fail.md, measured by
 //! `cablesense stability` on data/scenes/track_demo.toml): inside it every method
 //! converges to the physical branch; outside it a method returns a failure status
 //! (or, where the README says so, a finite shape), never a panic, a hang or a NaN.
@@ -187,7 +187,7 @@ fn rod_shooting_converges_to_the_physical_branch_inside_the_documented_region() 
     }
 }
 
-/// Past 50 (README "Where methods fail": the default cold solve to 1000 down, up and
+/// Past 50 (docs/where-methods-fail.md: the default cold solve to 1000 down, up and
 /// lateral, by multiple shooting above load intensity 20): converged, stable by
 /// Jacobi's test, and within 1e-6 m of the branch tracked from rest. The tracker
 /// follows the branch with single shooting to 40, hands over to multiple shooting by a

@@ -1,5 +1,5 @@
 //! Displacement actuation of continuously routed tendons (`routing = "continuous"`,
-//! Rucker & Webster 2011 coupled rod/tendon equations, `src/statics/continuous.rs`)
+//! Rucker & Webster 2011 coupled rod/tendon equations, `src/statics/pass/continuous.rs`)
 //! through the readings solve of `src/tendons/`.
 //!
 //! The robot is John Till's tendon robot (`data/scenes/till_tendon_robot.toml`: a

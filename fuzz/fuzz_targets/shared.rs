@@ -131,7 +131,7 @@ fn check_workspace(ws: &mut Workspace, what: &str) {
     let tip = ws.tip_position();
     let sol = ws.solution();
     // the tolerance a solve uses is the settings' raised to the residual's round-off
-    // floor, never lower, and never anything but that (README `[numerics]`), except
+    // floor, never lower, and never anything but that (docs/scene-format.md, `[numerics]`), except
     // under the condensed coupling, whose measured settle noise may raise it further
     // (`statics/workspace/noise.rs`)
     let floor = ws.residual_floor();

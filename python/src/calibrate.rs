@@ -57,7 +57,7 @@ fn calibration_err(py: Python<'_>, e: CoreError) -> PyErr {
         CoreError::Io { path, .. } => file = Some(path.clone()),
         CoreError::Model { source, .. } => field = crate::field_of(source),
         CoreError::NotConverged { line: l, .. } => line = Some(*l),
-        CoreError::Validation(_) | CoreError::BadInput(_) => {}
+        CoreError::Param(_) | CoreError::BadInput(_) => {}
     }
     let err = CalibrationError::new_err(e.to_string());
     let v = err.value(py);
@@ -118,7 +118,7 @@ pub fn calibrate<'py>(
         .iter()
         .map(|p| p.path.parse())
         .collect::<Result<_, _>>()
-        .map_err(|e| calibration_err(py, CoreError::Validation(e)))?;
+        .map_err(|e| calibration_err(py, CoreError::Param(e)))?;
     let report = py.detach(|| {
         let map = ColumnMap::from_spec(&spec);
         let train = Recording::load(&train, &map)?;

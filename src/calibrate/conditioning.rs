@@ -1,6 +1,6 @@
 //! Conditioning of servo readings before the tendon solve: a time offset between the
 //! servo log and the motion capture, and a backlash (play) between a servo and its
-//! tendon. Both are `[readings]` settings of a scene ([`crate::files::readings::ReadingsSpec`]
+//! tendon. Both are `[readings]` settings of a scene ([`crate::scene::ReadingsSpec`]
 //! `time_offset_s`, `backlash_m`), so they are ordinary calibration parameters
 //! (`readings/time_offset_s`, `readings/backlash_m`) and `track` applies them too.
 //!
@@ -29,7 +29,7 @@
 //! With `dt = 0` and `b = 0` the readings pass unchanged.
 
 use crate::error::ModelError;
-use crate::files::readings::ReadingsSpec;
+use crate::scene::ReadingsSpec;
 use std::collections::VecDeque;
 
 /// Largest time step (s) between two rows that are interpolated between; a larger

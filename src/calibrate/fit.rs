@@ -19,8 +19,8 @@
 use super::frame::RigidTransform;
 use super::lm::{LmIteration, LmStatus};
 use super::model::RowFailure;
-use super::spec::{CalibrationSpec, ParamSpec};
 use super::stats::{ParamStatistics, TipErrors};
+use crate::scene::calibration::{CalibrationSpec, ParamSpec};
 use crate::statics::SolveStatus;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};

@@ -34,9 +34,11 @@ mod readings_model;
 mod recording;
 mod report;
 mod run;
-mod spec;
 mod stats;
 
+pub use crate::scene::calibration::{
+    CalibrationSpec, LengthUnit, ParamSpec, TransformSpec, MIN_HUBER_SIGMA,
+};
 pub use conditioning::{Conditioning, InputTimeline, ReadingsHistory, MAX_GAP_S};
 pub use crossval::{cross_validate, parse_families, row_labels, CrossValidation, Folds, HeldOut};
 pub use fit::{
@@ -64,15 +66,14 @@ pub use recording::{
 };
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
 pub use run::{calibrate, frame_param_names, CalibrationSetup};
-pub use spec::{CalibrationSpec, LengthUnit, ParamSpec, TransformSpec, MIN_HUBER_SIGMA};
 pub use stats::{
     parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,
     CORRELATION_LIMIT, NULL_DIRECTION_LIMIT,
 };
 
 use crate::error::ModelError;
+use crate::scene::ParamError;
 use crate::statics::SolveStatus;
-use crate::validation::ValidationError;
 use thiserror::Error;
 
 /// Why a calibration could not run. Non-convergence of the fit itself is a status
@@ -135,9 +136,9 @@ pub enum CalibrationError {
         /// Cause.
         why: String,
     },
-    /// A parameter path or scene problem.
+    /// A parameter path is malformed or does not name a number in the scene.
     #[error(transparent)]
-    Validation(#[from] ValidationError),
+    Param(#[from] ParamError),
     /// The scene is invalid with some parameter values or loads.
     #[error("{context}: {source}")]
     Model {

@@ -18,9 +18,9 @@ use super::model::{
 use super::recording::RecordingRow;
 use super::CalibrationError;
 use crate::files::Scene;
+use crate::scene::ParamPath;
 use crate::statics::{Pose, Start};
 use crate::tendons::{Actuation, TendonWorkspace};
-use crate::validation::ParamPath;
 use std::collections::HashMap;
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;

@@ -5,8 +5,8 @@
 //! the column.
 
 use super::conditioning::InputTimeline;
-use super::spec::{CalibrationSpec, LengthUnit};
 use super::CalibrationError;
+use crate::scene::calibration::{CalibrationSpec, LengthUnit};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;

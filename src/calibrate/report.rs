@@ -7,10 +7,10 @@
 //! rounds to whole pixels, which turns mm-scale paths into staircases).
 
 use super::fit::{CalibrationReport, RowResult, Split};
-use super::spec::{CalibrationSpec, TransformSpec};
 use super::CalibrationError;
 use crate::files::Scene;
-use crate::validation::{set_params, ParamPath};
+use crate::scene::calibration::{CalibrationSpec, TransformSpec};
+use crate::scene::{set_params, ParamPath};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;

@@ -73,7 +73,7 @@ pub fn calibrate<M: CalibrationModel + Clone>(
         ));
     }
     if let Some(k) = settings.huber_sigma {
-        super::spec::check_huber_sigma("huber_sigma", k)
+        crate::scene::calibration::check_huber_sigma("huber_sigma", k)
             .map_err(|e| CalibrationError::BadInput(e.to_string()))?;
     }
     if train.rows.is_empty() {

@@ -1,12 +1,12 @@
 //! Building an [`Estimator`] and reading its state.
 
 use super::model::{self, DynModel, EstimationModel};
-use super::spec::{EstimateSpec, UnknownSpec};
 use super::{EstimateError, EstimateStatus, Estimator};
 use crate::error::ModelError;
 use crate::ladder::Rung;
 use crate::loads::Loads;
 use crate::robot::Robot;
+use crate::scene::estimate::{EstimateSpec, UnknownSpec};
 use crate::settings::SolverSettings;
 use crate::statics::{Start, Workspace};
 

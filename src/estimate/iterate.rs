@@ -5,8 +5,8 @@
 
 use super::linalg::sym_eigen;
 use super::model::EstimationModel;
-use super::spec::Method;
 use super::{qp, EstimateStatus, Estimator, LM_MAX_CONVERGED_DAMPING, MAX_TRIALS};
+use crate::scene::estimate::Method;
 use std::time::Instant;
 
 /// Accepted Broyden-updated steps after which a small step that stalled the cost is

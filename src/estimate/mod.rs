@@ -60,13 +60,12 @@ mod model;
 mod observe;
 mod qp;
 mod sensitivity;
-mod spec;
 mod tendon;
 mod tick;
 
+pub use crate::scene::estimate::{Axis, EstimateSpec, Method, UnknownKind, UnknownSpec};
 pub use joint::JointEstimator;
 pub use model::{DynModel, EstimationModel, RungModel};
-pub use spec::{Axis, EstimateSpec, Method, UnknownKind, UnknownSpec};
 pub use tendon::{
     Prediction, TendonEstimate, TendonLoadEstimator, TendonModel, SLACK_AGREES_SIGMAS,
 };

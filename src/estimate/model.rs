@@ -15,7 +15,6 @@
 //! workspace) so that the hot loop has no dynamic dispatch; [`DynModel`] is the
 //! run-time choice the command line uses.
 
-use super::spec::{Axis, EstimateSpec, UnknownKind};
 use super::EstimateError;
 use crate::error::ModelError;
 use crate::ladder::{
@@ -23,6 +22,7 @@ use crate::ladder::{
 };
 use crate::loads::{Frame, Loads, PointLoad};
 use crate::robot::Robot;
+use crate::scene::estimate::{Axis, EstimateSpec, UnknownKind};
 use crate::statics::{ParamSite, Pose, SolveReport, SolveStatus, Start, Workspace};
 use nalgebra::Vector3;
 

@@ -43,11 +43,11 @@
 //! `tests/estimate_tendon_loads.rs` checks them against central differences.
 
 use super::model::{sites, EstimationModel};
-use super::spec::{EstimateSpec, UnknownKind};
 use super::{Estimate, EstimateError, EstimateStatus, Estimator};
 use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::robot::Robot;
+use crate::scene::estimate::{EstimateSpec, UnknownKind};
 use crate::settings::SolverSettings;
 use crate::statics::{ParamSite, Pose, SolveReport, SolveStatus, Start, Workspace};
 use crate::tendons::{Actuation, TendonWorkspace};

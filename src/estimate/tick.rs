@@ -1,8 +1,8 @@
 //! One sample: intake of the measurements, forward solve at a trial point, cost.
 
 use super::model::EstimationModel;
-use super::spec::Method;
 use super::{argmin_gn, EstimateStatus, Estimator};
+use crate::scene::estimate::Method;
 use crate::statics::Start;
 use std::time::Instant;
 

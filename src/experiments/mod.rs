@@ -14,11 +14,17 @@
 
 pub mod pareto;
 pub mod stability;
-mod stability_estimate;
 pub mod sweep;
-pub mod tdcr;
 pub mod track;
 pub mod write;
+
+/// Tendon-driven robots in the experiments: sweeps over actuator readings of
+/// displacement-driven tendons (the readings rows of the pareto table and the
+/// readings direction of the stability map).
+pub mod tdcr {
+    pub use super::pareto::tdcr::{arc_readings, pareto_readings, readings_sweep};
+    pub use super::stability::tdcr::{readings_map, readings_settings, tension_form};
+}
 
 use crate::error::ModelError;
 use crate::estimate::EstimateError;

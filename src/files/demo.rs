@@ -7,8 +7,8 @@
 //! such files (the thesis tables and their scenes), on disk or embedded.
 //! [`write_all`] copies the embedded files out (`cablesense demo write DIR`).
 
-use crate::files::scene::{Scene, SceneError};
 use crate::files::thesis::{Table, TableError};
+use crate::scene::{Scene, SceneError};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 

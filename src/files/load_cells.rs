@@ -24,7 +24,7 @@
 //! (ignored by the readings parser, for comparison).
 
 use crate::estimate::{EstimateError, TendonLoadEstimator};
-use crate::files::scene::Scene;
+use crate::scene::Scene;
 use crate::ModelError;
 use std::fmt::Write;
 

@@ -6,8 +6,7 @@ pub(crate) mod json;
 pub mod load_cells;
 pub mod measure;
 pub mod readings;
-mod scene;
 pub mod svg;
 pub mod thesis;
 
-pub use scene::{Scene, SceneError};
+pub use crate::scene::{Scene, SceneError};

@@ -9,7 +9,7 @@ use crate::math::{orthonormalize, Real};
 pub fn rk4_step<T: Real>(y: &State<T>, h: f64, c: &Coeffs) -> State<T> {
     // Inlined all the way down: as a separate closure the RHS was not inlined into the
     // pass and its `State` went through memory (`forward_warm/average/rk4_24` 10 -> 15.6 us
-    // with the same instruction count, session 7's bisection).
+    // with the same instruction count, found by bisection).
     rk4_step_with(
         y,
         h,

@@ -414,7 +414,7 @@ pub(crate) fn add_params(
 }
 
 /// The curvature rungs (CC, PCC) take a continuously routed tendon
-/// (`statics::continuous`) only on a straight path, and reject a helical or
+/// (`statics::pass::continuous`) only on a straight path, and reject a helical or
 /// tabulated one, naming the cable.
 ///
 /// Why straight paths fit: a straight tendon at the constant offset `d` keeps its

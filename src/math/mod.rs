@@ -24,7 +24,7 @@ use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssi
 /// the two roundings it saves). The 3x3 kernels (`kernels.rs`) and the dual numbers'
 /// derivative parts use it: two instructions per direction instead of four in a
 /// `Dual`'s `a b + c`, one instead of two in an `f64` one (FTDCR v4 warm rows -11 %
-/// of their instructions, a `Dual<15>` sweep -40 %: benches/README.md, session 24).
+/// of their instructions, a `Dual<15>` sweep -40 %: benches/README.md).
 /// Results differ from the unfused sums in the last bits only; which one a build
 /// gets depends on its target, so bit-identical comparisons hold within one build.
 #[inline(always)]

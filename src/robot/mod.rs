@@ -1,25 +1,28 @@
 //! Robot layer: sections, guide disks, cables and the base pose, validated once.
 //!
-//! Conventions (also in the README): every section's backbone runs along its local
+//! Conventions (also in `docs/conventions.md`): every section's backbone runs along its local
 //! `+z` axis (thesis 2.5: the rod "extends along the z axis"); guide disks lie in the
 //! local `xy` plane (thesis 3.8.1 says "yz", which cannot be perpendicular to a rod
 //! along z: a typo); hole angles are measured in that plane from local `+x` towards
 //! `+y`; cable `j` runs from the base plate (`s = 0`) through every guide of the
 //! sections it spans to the last guide of its `end_section`.
 
+mod friction;
 mod routing;
 mod spec;
+mod tendon;
 
+pub use friction::capstan_factors;
 pub use routing::{PathPoint, PathSpec, RoutingField, TendonPath};
 pub use spec::{
     BaseSpec, CableFile, CableSpec, GuideSpec, HolesSpec, RobotSpec, SectionFile, SectionSpec,
     MAX_GUIDES_PER_SECTION,
 };
+pub use tendon::{Actuation, FrictionSpec, RoutingSpec, TendonMechanics, TendonSpec};
 
 use crate::error::ModelError;
 use crate::math::exp_so3;
 use crate::rod::Stiffness;
-use crate::tendons::{Actuation, TendonMechanics};
 use nalgebra::{Matrix3, Vector3};
 
 /// One guide disk of the validated robot.
@@ -245,11 +248,11 @@ impl Robot {
         // A displacement-driven continuous tendon is solved like a disk-routed one
         // (`crate::tendons`: its length is the pass's integral `int |p_i'| ds`, RW
         // 2011 section III, and its derivatives come from the dual sweep), except for
-        // capstan friction: `tendons::friction` is a per-hole wrap angle, and a tendon
+        // capstan friction: `robot::friction` is a per-hole wrap angle, and a tendon
         // sliding along a continuous sheath has friction distributed along its path
         // (tension varying with `s`, which the RW 2011 equations here do not model).
         let mu = spec.friction.as_ref().map_or(0.0, |f| f.mu);
-        if c.actuation == crate::tendons::Actuation::Displacement && mu > 0.0 {
+        if c.actuation == Actuation::Displacement && mu > 0.0 {
             return Err(ModelError::Invalid {
                 field: "robot.friction".into(),
                 why: format!(

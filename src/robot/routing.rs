@@ -15,8 +15,8 @@
 //! `s` is the arc length from the robot base (m); the tendon runs from the base plate
 //! (`s = 0`) to the end of its `end_section`.
 
+use super::tendon::RoutingSpec;
 use crate::error::ModelError;
-use crate::tendons::RoutingSpec;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;

@@ -1,9 +1,9 @@
 //! Serializable robot description (the `[robot]` table of a scene file), SI units.
 
 use super::routing::{PathSpec, RoutingField};
+use super::tendon::{Actuation, FrictionSpec, RoutingSpec, TendonSpec};
 use crate::error::ModelError;
 use crate::rod::{CrossSection, Material};
-use crate::tendons::{Actuation, FrictionSpec, RoutingSpec, TendonSpec};
 use serde::{Deserialize, Serialize};
 
 /// Whole robot: base pose, sections base to tip, cables.

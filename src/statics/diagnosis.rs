@@ -4,15 +4,14 @@
 //! named by the scene field a user would change.
 //!
 //! The intensity is the measure the solver itself decides with (the branch guard's
-//! checks above 3, multiple shooting above 20: README "Large loads"). A load of
+//! checks above 3, multiple shooting above 20: docs/where-methods-fail.md, "Large loads"). A load of
 //! intensity far above a few radians admits looped and inverted equilibria, and a
 //! cold solve from the straight rod may not reach the one the robot takes; a failed
 //! solve at a low intensity is a numerical matter instead (the integrator or the
-//! iteration budget), and the diagnosis says which case it is.
-//!
-//! Before (session 26): a tension of 500 N on the demo scene's cable (below the
-//! rod's `EA`, so valid input) ended `max_iterations` after 105 ms with a tip printed
-//! as if it were a result and no reason given.
+//! iteration budget), and the diagnosis says which case it is. Why: a tension of
+//! 500 N on the demo scene's cable (below the rod's `EA`, so valid input) ends
+//! `max_iterations` after about 100 ms, and the status alone gives a user no reason
+//! to act on.
 
 use super::intensity::{intensity_of, intensity_terms, IntensitySource};
 use super::{SolveReport, SolveStatus, Workspace};

@@ -7,7 +7,7 @@
 //! makes `Converged` a coin toss (the `forward_solve` fuzzer found a warm re-solve of a
 //! converged point ending `Stalled` at residual 2.23e-12 against tolerance 2.14e-12,
 //! and a continuation ending at 1.3e-12 against 1.0e-12). A solve therefore uses
-//! `max(settings.tolerance, floor)` (README `[numerics]`, `SolveReport::tolerance`).
+//! `max(settings.tolerance, floor)` (docs/scene-format.md, `[numerics]`, `SolveReport::tolerance`).
 //!
 //! Two sources, both in the scaled units of the residual (forces over `EI/L^2`,
 //! moments over `EI/L`, `EI` the smallest bending stiffness):

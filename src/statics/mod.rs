@@ -6,7 +6,6 @@
 //! tensioned cables. Newton's method with an exact Jacobian from forward-mode dual
 //! numbers, a backtracking line search, warm starts and load continuation.
 
-mod continuous;
 mod diagnosis;
 mod floor;
 mod intensity;
@@ -17,8 +16,8 @@ mod workspace;
 
 pub(crate) use diagnosis::diagnose_named;
 pub use diagnosis::{diagnose, Diagnosis, LoadShare, COMPRESSION_BLAMED_ABOVE, LOADS_BLAMED_ABOVE};
+pub(crate) use pass::LOCAL_TOL;
 pub use pass::{Pose, Sample};
-pub(crate) use pass::{ARC_ROUNDS, LOCAL_TOL};
 pub use plan::ParamSite;
 pub use workspace::joint::RhsCounts;
 pub use workspace::{Start, Workspace};
@@ -76,7 +75,7 @@ pub struct SolveReport {
     /// Tolerance the solve used (-): `settings.tolerance`, raised to the round-off
     /// floor of the residual for this robot, integrator and load when it is below it,
     /// and (condensed coupling) to 3 times the settle noise measured between two
-    /// evaluations of the same unknowns (README `[numerics]`, "Tolerance floor").
+    /// evaluations of the same unknowns (docs/scene-format.md, `[numerics]`, "Tolerance floor").
     /// `Converged` exactly when `residual <= tolerance`.
     pub tolerance: f64,
     /// ODE right-hand-side evaluations, counting each dual pass once per evaluation.

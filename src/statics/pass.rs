@@ -11,16 +11,16 @@
 //! inside the pass (module `condensed`).
 
 mod arc;
-pub(crate) use arc::ARC_ROUNDS;
 // The pass's buffers and what it records.
 mod buf;
 mod condensed;
+// The continuous tendons' terms inside the pass (Rucker & Webster 2011).
+mod continuous;
 // The jumps at section ends, point loads and disks.
 mod event;
 mod lowrank;
 mod small;
 
-use super::continuous;
 use super::plan::{Event, ParamSite, Plan};
 use crate::integrate::{dp45_step, rk4_step, ErrScale, State};
 use crate::math::Real;
@@ -30,6 +30,7 @@ use condensed::{
     fold_segment, jump_block, linear_retry, seed_jump, settle_segment, store_dnext, transport_next,
 };
 pub(crate) use condensed::{local_next, local_next_len, refine_local_next, set_local_next};
+pub(crate) use continuous::cable_length;
 use event::{actuator_tension, apply_event, wrench_det};
 use nalgebra::{Matrix3, Vector3};
 
@@ -174,7 +175,7 @@ pub(crate) fn pass<T: Real>(
                         let h = (iv.s1 - iv.s0) / iv.steps as f64;
                         // Two loops, not a branch per step: with the routed step as an
                         // alternative inside one loop, the plain step's state went through
-                        // memory (a memcpy per step; `forward_warm` +20 %, session 7).
+                        // memory (a memcpy per step; `forward_warm` +20 %).
                         match &act {
                             Some(a) => {
                                 for k in 0..iv.steps {

@@ -5,11 +5,10 @@
 //! Structure (intervals, events, unknowns) depends on the robot, the settings and
 //! which loads exist; the load *values* can be updated in place without allocating.
 
-use super::continuous::RoutedCable;
 use crate::error::ModelError;
 use crate::integrate::Coeffs;
 use crate::loads::{Frame, Loads};
-use crate::robot::Robot;
+use crate::robot::{Robot, TendonPath};
 use crate::settings::{CableCoupling, GuideMass, Integrator, RodModel, SolverSettings};
 use nalgebra::{Matrix3, Vector3};
 
@@ -82,7 +81,7 @@ pub(crate) struct PlanCable {
     /// Local position of the cable where it ends (m): its last hole, or a continuous
     /// tendon's path there.
     pub end_hole: Vector3<f64>,
-    /// Continuously routed (`crate::statics::continuous`): no disks, no chords.
+    /// Continuously routed (`crate::statics::pass::continuous`): no disks, no chords.
     pub routed: bool,
     /// Index of the first hole unknown (route disk 1) when tensioned.
     pub unknowns: Option<usize>,
@@ -115,6 +114,16 @@ pub(crate) struct ArcChord {
     /// The gap differs from the previous chord's in the guide's list (always for the
     /// first): the rounds predict it anew.
     pub new_gap: bool,
+}
+
+/// One continuously routed cable as the plan sees it.
+#[derive(Clone, Debug)]
+pub(crate) struct RoutedCable {
+    /// Index into `robot.cables`.
+    pub cable: usize,
+    pub path: TendonPath,
+    /// Arc length where it ends (m).
+    pub end_s: f64,
 }
 
 /// Everything a pass needs.
@@ -178,7 +187,7 @@ pub(crate) struct Plan {
     pub max_local: usize,
     /// Largest `3 * pending[g].len()`: the size of a segment's local iteration.
     pub max_pending_dirs: usize,
-    /// Continuously routed cables (see `statics::continuous`).
+    /// Continuously routed cables (see `statics::pass::continuous`).
     pub routed: Vec<RoutedCable>,
 }
 

@@ -332,8 +332,7 @@ impl Workspace {
     /// Replace the settings (rebuilds the plan; allocates). The load parameters and
     /// their values `theta` are kept, as in [`Workspace::set_loads`]: a workspace
     /// owned by a [`crate::tendons::TendonWorkspace`] carries the tensions there, and
-    /// dropping them made its next solve panic on a length mismatch (found in
-    /// session 14 by changing the tolerance of the FTDCR v4 scene's workspace). The
+    /// dropping them would make its next solve panic on a length mismatch. The
     /// unknowns are kept too when their number is unchanged, as a starting point for
     /// [`Workspace::adopt_unknowns`] callers; the workspace holds no solution (a
     /// `Start::Warm` solve starts cold).

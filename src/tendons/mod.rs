@@ -28,7 +28,7 @@
 //! **Continuous routing.** A displacement-driven tendon may also run on a continuous
 //! path (`routing = "continuous"`, [`crate::robot::TendonPath`]): then `l` is the
 //! path's length `int_0^{s_e} |p_i'| ds`, integrated along the shooting pass (RW 2011
-//! section III, `statics::continuous`), with its exact derivatives from the same dual
+//! section III, `statics::pass::continuous`), with its exact derivatives from the same dual
 //! sweep, and everything above holds unchanged (`L0` from the reference at `T0`,
 //! stretch, series spring, slack). Refused: capstan friction (`robot.friction` with
 //! `mu > 0`: a per-disk wrap-angle model, [`capstan_factors`]) on such a tendon.
@@ -40,53 +40,12 @@
 //! inextensible with given tensions; stretch, pretension and slack are what the
 //! position-controlled hardware adds (see `data/hardware/ftdcr_v4/`).
 
-mod friction;
+mod scene;
 mod solve;
-mod spec;
 
-pub use friction::capstan_factors;
+// The tendon's description, mechanics and capstan friction belong to the robot
+// (`crate::robot`); re-exported here under their established paths.
+pub use crate::robot::{
+    capstan_factors, Actuation, FrictionSpec, RoutingSpec, TendonMechanics, TendonSpec,
+};
 pub use solve::{TendonReport, TendonSettings, TendonWorkspace};
-pub use spec::{Actuation, FrictionSpec, RoutingSpec, TendonSpec};
-
-/// Resolved mechanics of one tendon (SI units).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TendonMechanics {
-    /// Axial stiffness `EA_t` (N); `inf` = inextensible.
-    pub stiffness_n: f64,
-    /// Series spring at the actuator (N/m); `inf` = none.
-    pub series_stiffness_n_per_m: f64,
-    /// Tension at reading 0 (N).
-    pub pretension_n: f64,
-    /// Encoder reading at `q = 0` (m).
-    pub zero_offset_m: f64,
-}
-
-impl TendonMechanics {
-    /// From a (validated) spec; `None` without a stiffness.
-    pub fn resolve(spec: &TendonSpec) -> Option<Self> {
-        Some(Self {
-            stiffness_n: spec.stiffness_n?,
-            series_stiffness_n_per_m: spec.series_stiffness_n_per_m.unwrap_or(f64::INFINITY),
-            pretension_n: spec.pretension_n.unwrap_or(0.0),
-            zero_offset_m: spec.zero_offset_m.unwrap_or(0.0),
-        })
-    }
-
-    /// Compliance `dl/dT` of the taut tendon at free length `free` (m/N), with
-    /// `stretch` the length-weighted mean tension factor of its chords (1 without
-    /// friction).
-    pub fn compliance(&self, free: f64, stretch: f64) -> f64 {
-        free * stretch / self.stiffness_n + 1.0 / self.series_stiffness_n_per_m
-    }
-
-    /// Path length (m) a taut tendon of free length `free` covers at tension `t`.
-    pub fn covered(&self, free: f64, t: f64, stretch: f64) -> f64 {
-        free + t * self.compliance(free, stretch)
-    }
-
-    /// Free length `L0` (m) from the reference path `l_ref` at the pretension.
-    pub fn free_length_at_rest(&self, l_ref: f64) -> f64 {
-        let t0 = self.pretension_n;
-        (l_ref - t0 / self.series_stiffness_n_per_m) / (1.0 + t0 / self.stiffness_n)
-    }
-}

@@ -265,7 +265,7 @@ impl TendonWorkspace {
             });
         }
         // every cable's path: the chords through its holes (thesis 3.8.1) or a
-        // continuous tendon's integral along the pass (`statics::continuous`)
+        // continuous tendon's integral along the pass (`statics::pass::continuous`)
         self.ws.cable_lengths_into(&mut self.lengths);
         for (i, &j) in self.driven.iter().enumerate() {
             let l = self.lengths[j];

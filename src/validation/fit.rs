@@ -23,11 +23,11 @@
 //! one (data/thesis/README.md, "Fitting method").
 
 use super::compare::compare;
-use super::param::{set_values, ParamPath};
 use super::tables::TableData;
 use super::ValidationError;
 use crate::calibrate::{Bounds, LeastSquares, LmSettings, LmStatus};
 use crate::files::Scene;
+use crate::scene::param::{set_values, ParamPath};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use std::cell::Cell;
@@ -219,7 +219,10 @@ impl FitProblem {
     }
     /// Parameter values in the scene (the starting point).
     pub fn initial(&self) -> Result<Vec<f64>, ValidationError> {
-        self.params.iter().map(|p| p.value(&self.scene)).collect()
+        self.params
+            .iter()
+            .map(|p| p.value(&self.scene).map_err(Into::into))
+            .collect()
     }
     /// Residual vectors evaluated so far.
     pub fn evaluations(&self) -> usize {

@@ -4,10 +4,10 @@
 //! `cablesense validate` and the table tests.
 
 use super::fit::{FitReport, Target};
-use super::param::{set_params, ParamPath};
 use super::ValidationError;
 use crate::files::demo::DataSource;
 use crate::files::Scene;
+use crate::scene::param::{set_params, ParamPath};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -175,7 +175,7 @@ impl FitRecord {
             .iter()
             .map(|p| Ok((p.path.parse::<ParamPath>()?, p.value)))
             .collect::<Result<Vec<_>, ValidationError>>()?;
-        set_params(scene, &pairs)
+        Ok(set_params(scene, &pairs)?)
     }
 
     /// The fitted value of `path`, if recorded.

@@ -21,10 +21,10 @@ mod fitted;
 mod hardware;
 mod inverse;
 mod inverse_loo;
-mod param;
 mod tables;
 mod track_chain;
 
+pub use crate::scene::param::{set_params, set_values, ParamError, ParamPath};
 pub use compare::{
     compare, simulate, Comparison, LengthRow, LengthSummary, PointRow, PointSummary, RowComparison,
 };
@@ -37,7 +37,6 @@ pub use hardware::{
 };
 pub use inverse::{table_4_5_inverse, table_4_5_inverse_from, InverseRow, READING_SIGMA_M};
 pub use inverse_loo::{table_4_5_loo, LooRow, TableRowModel, LOO_PARAMS, TIP_SIGMA_M, Z95};
-pub use param::{set_params, set_values, ParamPath};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
 pub use track_chain::{track_errors, ChainStep, TrackChain, TrackErrors};
 
@@ -73,33 +72,9 @@ pub enum ValidationError {
     /// Unknown table name.
     #[error("unknown table `{0}` (known: 4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc)")]
     UnknownTable(String),
-    /// A parameter path is malformed.
-    #[error("parameter path `{path}`: {why}")]
-    BadPath {
-        /// The path as given.
-        path: String,
-        /// What is wrong.
-        why: String,
-    },
-    /// A parameter path does not lead to a number in the scene.
-    #[error("parameter path `{path}` does not name a number in the scene: {why}")]
-    NoSuchParam {
-        /// The path as given.
-        path: String,
-        /// Where the walk stopped.
-        why: String,
-    },
-    /// The scene no longer deserializes after writing a value (e.g. a float into
-    /// an integer field).
-    #[error("setting `{path}` = {} breaks the scene: {why}", crate::error::Num(*.value))]
-    SetFailed {
-        /// The path.
-        path: String,
-        /// The value written.
-        value: f64,
-        /// Deserializer message.
-        why: String,
-    },
+    /// A parameter path is malformed or does not lead to a number in the scene.
+    #[error(transparent)]
+    Param(#[from] ParamError),
     /// The scene lacks a point load a row needs to set.
     #[error("table {table}: the scene needs loads.point[{point}] ({why})")]
     MissingPointLoad {

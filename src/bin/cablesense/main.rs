@@ -1,5 +1,5 @@
 //! `cablesense`: forward statics, validation and estimation for cable-driven
-//! continuum robots. See the README for the commands and file formats.
+//! continuum robots. See the README for the commands and `docs/` for the file formats.
 
 mod calibrate;
 mod crossval;

@@ -16,7 +16,7 @@ pub struct Args {
     /// list`). Default: the shipped demo robot.
     #[arg(default_value = cablesense::files::demo::SOLVE_SCENE)]
     scene: PathBuf,
-    /// Print JSON (schema in the README) instead of text.
+    /// Print JSON (schema in docs/output-schema.md) instead of text.
     #[arg(long)]
     json: bool,
     /// Write the backbone samples as CSV to this file.

@@ -172,7 +172,7 @@ impl Multi {
     /// through consecutive guides strictly inside the rod (a node starts at each of
     /// their disks, whose pose the neighbouring disks' chords read).
     pub fn supports(plan: &Plan) -> bool {
-        // continuously routed tendons (`statics::continuous`) change the right-hand
+        // continuously routed tendons (`statics::pass::continuous`) change the right-hand
         // side and carry integrated lengths: the intervals here do not model them
         if plan.cables.iter().any(|c| c.routed) || !plan.routed.is_empty() {
             return false;

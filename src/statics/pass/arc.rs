@@ -47,22 +47,9 @@ use super::{unit, v3, PassBuf};
 use crate::integrate::{Coeffs, State};
 use crate::math::{cross, fma, mat_t_vec, mat_vec, mat_vec_f64, Dual, Real};
 #[cfg(doc)]
-use crate::settings::SolverSettings;
+use crate::settings::{SolverSettings, ARC_ROUNDS};
 use crate::statics::plan::{ArcChord, Plan};
 use nalgebra::{Matrix3, Vector3};
-
-/// Default rounds of "predict the next holes from the jump of the last round" at a
-/// disk ([`SolverSettings::arc_rounds`]; the carried start gives the first jump). On
-/// the 443 FTDCR v4 val rows, solved warm, tips against those of the rounds' fixed
-/// point (40 rounds): from the mirrored chords alone (before session 25) 2 rounds 32
-/// um mean (max 0.34 mm), 3 rounds 7.0 um (max 91 um); from the carried start 1
-/// round 39 um (max 0.27 mm; the last correction alone: extrapolating one round's
-/// unconverged corrections gave 215 um), 2 rounds 6.7 um (max 60 um), 3 rounds 0.66
-/// um (max 5.3 um). The fixed point is 3.3 um (max 25 um) from the condensed
-/// coupling: the arc's own error. Callgrind instructions of those warm rows
-/// (`examples/tendon_profile`): 3 rounds mirrored 0.932e9, carried 2 rounds 0.836e9,
-/// 1 round 0.693e9.
-pub(crate) const ARC_ROUNDS: usize = 3;
 
 /// `sin x / x`, `(1 - cos x) / x^2` and `(x - sin x) / x^3` of `x = sqrt(x2)`: series
 /// for `x2 <= 0.25` (truncation below 3e-11; no square root, so a dual at `x = 0` has
@@ -72,7 +59,7 @@ pub(crate) const ARC_ROUNDS: usize = 3;
 /// the value (a `Dual<1>`: the same value arithmetic as an `f64`), and the chain rule
 /// ([`Real::chain`]) gives every direction with one product each, instead of a
 /// dozen dual operations per function (a `Dual<15>` sweep on the FTDCR v4 val rows:
-/// benches/README.md, session 28).
+/// benches/README.md).
 #[inline]
 fn exp_coefficients<T: Real>(x2: T) -> (T, T, T) {
     if T::DIRS == 0 {
@@ -267,7 +254,7 @@ fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
 /// same values), and each output's directions are its six partials times the
 /// inputs' directions plus, per chord, `d / |d|` (and `rho x d / |d|`) times the
 /// tension's. A `Dual<15>` sweep on the FTDCR v4 val rows: 3.9 % fewer instructions
-/// (benches/README.md, session 28). Not inlined: inlined into `guide_chords` the
+/// (benches/README.md). Not inlined: inlined into `guide_chords` the
 /// sweep took 1.6 % more instructions than this way.
 #[inline(never)]
 fn round_chained<T: Real>(
@@ -423,7 +410,7 @@ mod tests {
     /// warm from the servo readings of the 443 val rows: the tips with 2 rounds
     /// from the carried start (the scene's `arc_rounds`) lie as close to the tips of
     /// the rounds' fixed point (40 rounds from the mirrored chords, no carry) as those
-    /// of 3 rounds from the mirrored chords alone (the coupling before session 25),
+    /// of 3 rounds from the mirrored chords alone (the coupling without the carry),
     /// by the mean and by the largest distance; 2 rounds from the mirrored chords lie
     /// several times farther. One round from the carried start converges on every row
     /// within 0.1 mm on average. Measured: mean / max 6.7 / 60 um carried, 7.0 / 91 um

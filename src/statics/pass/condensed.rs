@@ -428,7 +428,7 @@ pub(super) fn fold_segment<T: Real>(plan: &Plan, buf: &mut PassBuf<T>, y: &mut S
     y.n.iter_mut().for_each(fold);
     y.m.iter_mut().for_each(fold);
     // the continuous tendons' lengths integrated over the segment are states too
-    // (`statics::continuous`: `int |q_i| ds` depends on the jump through the strains);
+    // (`statics::pass::continuous`: `int |q_i| ds` depends on the jump through the strains);
     // a robot without them has nothing to fold
     if !plan.routed.is_empty() {
         buf.lengths.iter_mut().for_each(fold);

@@ -84,7 +84,7 @@ pub(super) fn apply_event<T: Real>(
                 };
                 // the cable pulls the disk along both straight chords (thesis 3.8.1
                 // routing); with friction each chord has its own share of the
-                // actuator's tension (capstan factors, `crate::tendons::friction`)
+                // actuator's tension (capstan factors, `crate::robot::friction`)
                 let (t, t_next) = if k + 1 < c.len {
                     (t.scale(c.factor[k]), t.scale(c.factor[k + 1]))
                 } else {

@@ -12,7 +12,7 @@ const CONTINUATION_BUDGET: usize = 10;
 /// Jacobi's test (tensioned cables, body-frame loads) is a branch-checked load
 /// continuation from the unloaded rod instead of a Newton from the straight rod. On the
 /// track demo a cold Newton lands on the continued branch up to 6 and on other
-/// equilibria from 7 (README "Where methods fail"): half of 6, for margin.
+/// equilibria from 7 (docs/where-methods-fail.md): half of 6, for margin.
 pub const CERTIFY_INTENSITY: f64 = 3.0;
 /// Largest load-intensity increment of one step of the branch-checked continuation.
 const CERTIFY_STEP: f64 = 2.0;

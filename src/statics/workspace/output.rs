@@ -1,7 +1,7 @@
 //! What a solve hands out: unknowns, residuals, cable lengths, base wrench, tip and
 //! the full [`Solution`].
 
-use super::super::continuous::cable_length;
+use super::super::pass::cable_length;
 use super::*;
 
 impl Workspace {

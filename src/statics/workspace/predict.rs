@@ -29,7 +29,7 @@
 //! last inverse Jacobian with its Broyden updates; a small linear solve, no pass),
 //! whose residual is that of a Newton step from it; the solve still hands back and
 //! reports the point it evaluated. Measured in `examples/till_ramp_profile.rs` (see
-//! `benches/README.md`, session 12).
+//! `benches/README.md`).
 //!
 //! It is used only when the unknowns are exactly the last solution (nothing moved
 //! them since, e.g. [`super::Workspace::set_theta_predicted`]'s own predictor) and the
@@ -114,7 +114,7 @@ impl Secant {
     /// with two nodes, quadratic with three, cubic with four: along a steady ramp the
     /// error drops by about one load step's ratio per node). The nodes are the
     /// candidates nearest `alpha`, at least [`MIN_SPACING`] apart: along a steady
-    /// ramp the last four solutions, as before session 14; where the ramp turns back
+    /// ramp the last four solutions; where the ramp turns back
     /// the solutions it revisits (a node at `alpha` itself makes the prediction that
     /// solution). Why: on Till's robot with 100 disks (`examples/till_ramp_profile`)
     /// the second step after a turn had only the two nodes `0, -1` (the third point

@@ -1,7 +1,7 @@
 //! Implicit-differentiation sensitivities of the cable lengths to the load
 //! parameters `theta` at a converged point.
 
-use super::super::continuous::cable_length;
+use super::super::pass::cable_length;
 use super::*;
 
 impl Workspace {

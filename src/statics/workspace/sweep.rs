@@ -2,7 +2,7 @@
 //! `[x; theta]`, and the buffers of the condensed coupling (whose passes carry
 //! [`JUMP_DIRS`] local directions besides the outer ones, see `statics::pass`).
 
-use super::super::continuous::cable_length;
+use super::super::pass::cable_length;
 use super::super::pass::{pass, PassBuf};
 use super::super::plan::{Plan, JUMP_DIRS};
 use crate::math::Dual;

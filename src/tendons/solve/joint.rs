@@ -69,7 +69,7 @@ pub(super) struct ChordPolicy {
     skip_after_failure: bool,
     /// Trials of a chord step: the full step, then after each evaluated failure the
     /// full step of the inverse Broyden-updated from that trial
-    /// (`TendonWorkspace::joint_chord_retry`, since session 28); a trial whose pass
+    /// (`TendonWorkspace::joint_chord_retry`); a trial whose pass
     /// failed is halved instead, and a halved step is accepted on Armijo's decrease
     /// (`1 - 1e-4 alpha`).
     trials: usize,
@@ -100,7 +100,7 @@ impl ChordPolicy {
     /// Broyden step that halves the merit costs one pass; on the 443 FTDCR v4 val
     /// rows 0.5 cut the dual RHS per row 420 -> 345 for 6039 -> 6257 `f64` ones (0.9:
     /// 338 and 6296, about the same; always trying the chord at a row's start: 311
-    /// and 7286, worse). Session 20 measured the arc policy below on this coupling:
+    /// and 7286, worse). The arc policy below, measured on this coupling:
     /// 2 190 / 105.4 -> 3 020 / 68.3 `f64` / dual RHS a row (worse).
     pub(super) const CONDENSED: Self = Self {
         skip_after_failure: true,
@@ -111,7 +111,7 @@ impl ChordPolicy {
     };
     /// The arc coupling: an explicit pass is cheap (120 RHS and the disks' rounds)
     /// and a `Dual<15>` sweep is worth ~12 of them, so a chord step is retried
-    /// before it gives way (halved until session 28, now `joint_chord_retry`), and
+    /// before it gives way (updated by `joint_chord_retry`, not halved), and
     /// every row tries it first. On the 443 FTDCR v4 val rows warm
     /// (`examples/tendon_profile`, `COUPLING=arc`), `f64` / dual RHS a row and
     /// callgrind instructions: the condensed policy 950 / 97.2, 1.322e9; this
@@ -120,7 +120,7 @@ impl ChordPolicy {
     /// and 0.99, 1 131 / 54.4, 1.144e9; 3 and 0.99, 1 233 / 47.7, 1.156e9; 4 and
     /// 0.99, 1 347 / 47.4; 3 and 0.7, 1 244 / 47.9.
     ///
-    /// A full step that raises the merit more than 3x is not halved (session 27): at
+    /// A full step that raises the merit more than 3x is not halved: at
     /// a row's start, the halvings of such steps were accepted in 33 of 335 cases
     /// (3 laps of the val rows at the scene's tolerances; the failed full steps rose
     /// 1.4-925x, median 4.9x, those whose halving was accepted mostly below 2.8x).
@@ -536,7 +536,7 @@ impl TendonWorkspace {
     /// residual is `f_prev`), then the step from the iterate with the updated
     /// inverse, to be tried whole. `false` when that step leaves the step limit.
     ///
-    /// Why not halve the old step, as before session 28: the trial saw how the
+    /// Why not halve the old step: the trial saw how the
     /// residual bends along the step, and halving throws that away. On the FTDCR v4
     /// recordings warm (`f64` / dual RHS a row, and in pass units, `f64` / 120 + 9.4
     /// x dual / 120): val rows 611 / 39.7 -> 558 / 37.5 (8.20 -> 7.59), train 549 /

@@ -15,7 +15,7 @@
 //! Why: on the 443 FTDCR v4 val rows warm (3 laps), half the sweeps (218 of 415)
 //! were taken only because the active set had changed since the last one. Measured
 //! with `examples/tendon_profile` (`f64` / dual RHS a row; pass units `f64` / 120 +
-//! 9.4 x dual / 120, a sweep costing ~9.4 passes), session 29:
+//! 9.4 x dual / 120, a sweep costing ~9.4 passes):
 //!
 //! | rows | before | carried at a row's start (kept) | carried at every iteration |
 //! |---|---|---|---|

@@ -130,7 +130,7 @@ pub(super) fn factor_and_invert(lu: &mut DenseLu, inv: &mut [f64]) -> bool {
 /// 1e-6 / 1e-9 m 10.81 -> 10.11, 1e-4 / 1e-8 m (`q = 100`) 9.94 -> 9.23; train rows
 /// 7.14 -> 6.89; the calibrated scene's val rows 10.56 -> 10.06; 1 kHz ticks 1.67 ->
 /// 1.64; cold rows 18.98 -> 18.97. A fixed weight does not do: 200 at the default
-/// tolerances cost 13.79 -> 18.30 (benches/README.md, session 28).
+/// tolerances cost 13.79 -> 18.30 (benches/README.md).
 ///
 /// Only ever raised (`q >= 1`): where the stopping test asks less of `G` than the
 /// merit's unit (`q < 1`, e.g. 1e-10 and 1e-10 m, `q = 0.01`) nothing was measured

@@ -6,7 +6,7 @@
 //! active set, residual `[r; G]`, merit) is restored from a copy instead of being
 //! evaluated again: one `f64` pass saved each time, and the same arithmetic after it,
 //! since the sweep and the step from the iterate read only these and the iterate's
-//! unknowns and tensions. On the 443 FTDCR v4 val rows warm, 3 laps (session 27):
+//! unknowns and tensions. On the 443 FTDCR v4 val rows warm, 3 laps:
 //! 371 returns after a failed chord step and 186 rejected predicted starts, 0.42 of
 //! a row's ~5.9 passes. Not under the condensed coupling
 //! ([`crate::statics::Workspace::settles_holes`]): its passes settle the next holes

@@ -14,11 +14,46 @@
 //! [`serde_json::Value`], the numbers are written, and the value is deserialized
 //! back, so any numeric field works and the scene's own schema checks apply.
 
-use super::ValidationError;
-use crate::files::Scene;
+use super::Scene;
 use serde_json::Value;
 use std::fmt;
 use std::str::FromStr;
+use thiserror::Error;
+
+/// Why a parameter path could not be parsed, read or written.
+#[derive(Debug, Error)]
+pub enum ParamError {
+    /// The path is malformed.
+    #[error("parameter path `{path}`: {why}")]
+    BadPath {
+        /// The path as given.
+        path: String,
+        /// What is wrong.
+        why: String,
+    },
+    /// A parameter path does not lead to a number in the scene.
+    #[error("parameter path `{path}` does not name a number in the scene: {why}")]
+    NoSuchParam {
+        /// The path as given.
+        path: String,
+        /// Where the walk stopped.
+        why: String,
+    },
+    /// The scene no longer deserializes after writing a value (e.g. a float into
+    /// an integer field).
+    #[error("setting `{path}` = {} breaks the scene: {why}", crate::error::Num(*.value))]
+    SetFailed {
+        /// The path.
+        path: String,
+        /// The value written.
+        value: f64,
+        /// Deserializer message.
+        why: String,
+    },
+    /// The scene could not be serialized to its JSON form.
+    #[error("serializing the scene: {0}")]
+    Serialize(String),
+}
 
 /// One segment of a [`ParamPath`].
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -37,11 +72,11 @@ pub struct ParamPath {
 }
 
 impl FromStr for ParamPath {
-    type Err = ValidationError;
+    type Err = ParamError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let text = s.trim().trim_start_matches('/').to_string();
         if text.is_empty() {
-            return Err(ValidationError::BadPath {
+            return Err(ParamError::BadPath {
                 path: s.into(),
                 why: "empty".into(),
             });
@@ -49,7 +84,7 @@ impl FromStr for ParamPath {
         let segments = text
             .split('/')
             .map(|seg| match seg {
-                "" => Err(ValidationError::BadPath {
+                "" => Err(ParamError::BadPath {
                     path: s.into(),
                     why: "empty segment (`//`)".into(),
                 }),
@@ -75,7 +110,7 @@ impl ParamPath {
 
     /// Every number the path matches in `scene`, in document order. Fails when the
     /// path matches nothing or something that is not a number.
-    pub fn get(&self, scene: &Scene) -> Result<Vec<f64>, ValidationError> {
+    pub fn get(&self, scene: &Scene) -> Result<Vec<f64>, ParamError> {
         let mut value = to_value(scene)?;
         let mut out = Vec::new();
         self.walk(&mut value, 0, "", &mut |v, at| match v.as_f64() {
@@ -90,18 +125,17 @@ impl ParamPath {
 
     /// The value of the parameter: the first match (all matches of a `*` path are
     /// equal after [`ParamPath::set_in`]; a scene where they differ reports the first).
-    pub fn value(&self, scene: &Scene) -> Result<f64, ValidationError> {
+    pub fn value(&self, scene: &Scene) -> Result<f64, ParamError> {
         Ok(self.get(scene)?[0])
     }
 
     /// Write `value` into every match of the path in the JSON form of a scene.
-    pub fn set_in(&self, root: &mut Value, value: f64) -> Result<(), ValidationError> {
-        let number =
-            serde_json::Number::from_f64(value).ok_or_else(|| ValidationError::SetFailed {
-                path: self.text.clone(),
-                value,
-                why: "not a finite number".into(),
-            })?;
+    pub fn set_in(&self, root: &mut Value, value: f64) -> Result<(), ParamError> {
+        let number = serde_json::Number::from_f64(value).ok_or_else(|| ParamError::SetFailed {
+            path: self.text.clone(),
+            value,
+            why: "not a finite number".into(),
+        })?;
         self.walk(root, 0, "", &mut |v, at| {
             if v.is_number() {
                 *v = Value::Number(number.clone());
@@ -118,8 +152,8 @@ impl ParamPath {
         depth: usize,
         at: &str,
         leaf: &mut dyn FnMut(&mut Value, &str) -> Result<(), String>,
-    ) -> Result<(), ValidationError> {
-        let fail = |why: String| ValidationError::NoSuchParam {
+    ) -> Result<(), ParamError> {
+        let fail = |why: String| ParamError::NoSuchParam {
             path: self.text.clone(),
             why,
         };
@@ -176,7 +210,7 @@ impl ParamPath {
 
 /// A copy of `scene` with each `(path, value)` written, in order (a later path
 /// overrides an earlier one where both match). One serialize/deserialize round trip.
-pub fn set_params(scene: &Scene, params: &[(ParamPath, f64)]) -> Result<Scene, ValidationError> {
+pub fn set_params(scene: &Scene, params: &[(ParamPath, f64)]) -> Result<Scene, ParamError> {
     if params.is_empty() {
         return Ok(scene.clone());
     }
@@ -184,7 +218,7 @@ pub fn set_params(scene: &Scene, params: &[(ParamPath, f64)]) -> Result<Scene, V
     for (p, v) in params {
         p.set_in(&mut root, *v)?;
     }
-    serde_json::from_value(root).map_err(|e| ValidationError::SetFailed {
+    serde_json::from_value(root).map_err(|e| ParamError::SetFailed {
         path: params
             .iter()
             .map(|(p, _)| p.as_str())
@@ -201,14 +235,13 @@ pub fn set_values(
     scene: &Scene,
     params: &[ParamPath],
     values: &[f64],
-) -> Result<Scene, ValidationError> {
+) -> Result<Scene, ParamError> {
     let pairs: Vec<(ParamPath, f64)> = params.iter().cloned().zip(values.iter().copied()).collect();
     set_params(scene, &pairs)
 }
 
-fn to_value(scene: &Scene) -> Result<Value, ValidationError> {
-    serde_json::to_value(scene)
-        .map_err(|e| ValidationError::Fitted(format!("serializing the scene: {e}")))
+fn to_value(scene: &Scene) -> Result<Value, ParamError> {
+    serde_json::to_value(scene).map_err(|e| ParamError::Serialize(e.to_string()))
 }
 
 fn kind(v: &Value) -> &'static str {

@@ -1,12 +1,26 @@
-//! Scene files: robot + loads + numerics in one TOML or JSON document, SI units.
+//! Scene layer: the schema of a scene file (robot + loads + numerics, and the
+//! optional `[estimate]`, `[readings]` and `[calibration]` tables) in one TOML or
+//! JSON document, SI units, and the parameter paths into it ([`ParamPath`]).
 //!
 //! Every table uses `deny_unknown_fields`, so a misspelt key fails loudly with its
 //! name and position; numbers are validated when the scene is turned into a
 //! [`Robot`], with the field path in the error.
+//!
+//! This layer only describes problems: it sits below every module that reads a
+//! scene (estimate, calibrate, files, validation), and the solvers build themselves
+//! from it (`TendonWorkspace::from_scene`, `ReadingsParser::from_scene`).
 
-use crate::calibrate::CalibrationSpec;
+pub mod calibration;
+pub mod estimate;
+pub mod param;
+pub mod readings;
+
+pub use calibration::CalibrationSpec;
+pub use estimate::EstimateSpec;
+pub use param::{set_params, set_values, ParamError, ParamPath};
+pub use readings::ReadingsSpec;
+
 use crate::error::ModelError;
-use crate::estimate::EstimateSpec;
 use crate::loads::Loads;
 use crate::robot::{Robot, RobotSpec};
 use crate::settings::SolverSettings;
@@ -34,7 +48,7 @@ pub struct Scene {
     pub estimate: Option<EstimateSpec>,
     /// How to read actuator readings of displacement-driven tendons (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub readings: Option<super::readings::ReadingsSpec>,
+    pub readings: Option<ReadingsSpec>,
     /// Calibration from a recording for `calibrate` (optional): columns, capture
     /// noise, capture frame, marker offset, parameters to fit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -149,40 +163,6 @@ impl Scene {
     /// The validated robot.
     pub fn build_robot(&self) -> Result<Robot, ModelError> {
         Robot::new(self.robot.clone())
-    }
-    /// A workspace that solves this scene from actuator readings (the scene needs
-    /// displacement-driven tendons): reference solve at the pretensions included.
-    pub fn tendon_workspace(&self) -> Result<crate::tendons::TendonWorkspace, ModelError> {
-        crate::tendons::TendonWorkspace::new(
-            self.build_robot()?,
-            self.loads.clone(),
-            self.numerics.clone(),
-        )
-    }
-    /// A parser for readings files of this scene's displacement-driven tendons, with
-    /// a `length_<cable>` column for each passive (measuring) cable.
-    pub fn readings_parser(
-        &self,
-        ws: &crate::tendons::TendonWorkspace,
-    ) -> super::readings::ReadingsParser {
-        let robot = ws.workspace().robot();
-        super::readings::ReadingsParser::new(
-            ws.columns().to_vec(),
-            ws.driven()
-                .iter()
-                .map(|&j| robot.cables()[j].name.clone())
-                .collect(),
-            self.readings.clone().unwrap_or_default(),
-        )
-        .with_measuring_cables(
-            robot
-                .cables()
-                .iter()
-                .map(|c| {
-                    (c.actuation == crate::tendons::Actuation::Passive).then(|| c.name.clone())
-                })
-                .collect(),
-        )
     }
     /// Serialize to TOML.
     pub fn to_toml_string(&self) -> String {

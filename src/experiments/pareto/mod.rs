@@ -8,7 +8,9 @@
 //! sweep load), the median time of an estimator tick on that rung and its final
 //! estimate error, and on thesis scenes the RMS distance of the tracked points from
 //! the observed ones. A scene with displacement-driven tendons is swept over readings
-//! instead ([`super::tdcr::pareto_readings`]).
+//! instead ([`tdcr::pareto_readings`]).
+
+pub(super) mod tdcr;
 
 use super::sweep::{across, pareto_sweep, with_tip_force};
 use super::{median, ExperimentError, Progress};
@@ -347,7 +349,7 @@ pub fn thesis_table_for(scene_path: &Path) -> Result<Option<TableData>, Experime
 }
 
 /// Whether `robot` is driven by readings (any displacement-driven tendon): then
-/// [`run_scene`] sweeps readings ([`super::tdcr::pareto_readings`]).
+/// [`run_scene`] sweeps readings ([`tdcr::pareto_readings`]).
 pub fn is_tdcr(robot: &Robot) -> bool {
     robot
         .cables()
@@ -376,7 +378,7 @@ pub fn run_scene(
     settings.validate()?;
     let robot = scene.build_robot()?;
     if is_tdcr(&robot) {
-        return super::tdcr::pareto_readings(name, scene, &robot, settings, progress);
+        return tdcr::pareto_readings(name, scene, &robot, settings, progress);
     }
     let loads = pareto_sweep(&robot, &scene.loads);
     let mut reference = Rung::reference().build(&robot)?;

@@ -17,7 +17,10 @@
 //! reference (full Cosserat, adaptive 1e-12, tracked along each direction by warm
 //! starts, [`super::track`]). A robot with displacement-driven tendons is mapped on its
 //! tension form (every tendon tension-driven) plus a readings direction
-//! ([`super::tdcr::readings_map`]).
+//! ([`tdcr::readings_map`]).
+
+mod estimate;
+pub(super) mod tdcr;
 
 use super::sweep::{loads_at, Direction, DIRECTIONS};
 use super::{ExperimentError, Progress};
@@ -305,10 +308,10 @@ fn forward_map(
 /// Units of work [`run`] reports (for a progress bar): per direction the reference,
 /// every forward setting and every estimation method; plus the readings map.
 pub fn step_count(robot: &Robot, settings: &StabilitySettings) -> usize {
-    let per_dir = 1 + forward_settings(robot).len() + super::stability_estimate::METHODS.len();
+    let per_dir = 1 + forward_settings(robot).len() + estimate::METHODS.len();
     let dirs = map_directions(robot, settings).len();
     let readings = if settings.readings && super::pareto::is_tdcr(robot) {
-        1 + super::tdcr::readings_settings().len()
+        1 + tdcr::readings_settings().len()
     } else {
         0
     };
@@ -325,7 +328,7 @@ fn map_directions(robot: &Robot, settings: &StabilitySettings) -> Vec<Direction>
 }
 
 /// Map `scene` (module docs). A robot with displacement-driven tendons is mapped on
-/// its tension form ([`super::tdcr::tension_form`]) and, with `settings.readings`,
+/// its tension form ([`tdcr::tension_form`]) and, with `settings.readings`,
 /// along readings too.
 pub fn run(
     scene: &Scene,
@@ -336,7 +339,7 @@ pub fn run(
     let driven = scene.build_robot()?;
     let tdcr = super::pareto::is_tdcr(&driven);
     let scene_t = if tdcr {
-        super::tdcr::tension_form(scene)?
+        tdcr::tension_form(scene)?
     } else {
         scene.clone()
     };
@@ -349,14 +352,7 @@ pub fn run(
         let refs = super::track::reference(&robot, &scene_t.loads, dir)?;
         progress(Progress::Done);
         forward_map(&robot, &scene_t.loads, dir, &refs, &mut points, progress)?;
-        super::stability_estimate::estimate_map(
-            &robot,
-            &scene_t,
-            dir,
-            settings,
-            &mut points,
-            progress,
-        )?;
+        estimate::estimate_map(&robot, &scene_t, dir, settings, &mut points, progress)?;
         progress(Progress::Note(format!(
             "stability: {} done in {:.1} s",
             dir.name(),
@@ -364,7 +360,7 @@ pub fn run(
         )));
     }
     if tdcr && settings.readings {
-        super::tdcr::readings_map(&driven, &scene.loads, &mut points, progress)?;
+        tdcr::readings_map(&driven, &scene.loads, &mut points, progress)?;
         dirs.push(Direction::Readings);
     }
     Ok(StabilityMap {

@@ -34,7 +34,7 @@
 //! 3 x 3 block is solved and `n' = -f - R (G u' + a)`.
 //! Where tendon `i` ends (`s_e`, a section end) it pulls the rod at `p_i(s_e)` with
 //! `F = -tau_i R h(s_e-)` (RW eqs. 18-20): `n(s+) = n(s-) - F`,
-//! `m(s+) = m(s-) - (R r_i) x F` (the README's jump convention). It is applied right
+//! `m(s+) = m(s-) - (R r_i) x F` (the jump convention of docs/conventions.md). It is applied right
 //! after the interval ending at `s_e` is integrated, before any other event there,
 //! so `h` uses the strains just proximal to the end plate.
 //!
@@ -43,28 +43,17 @@
 //! Everything is generic over [`Real`], so dual passes give exact Jacobians, tension
 //! parameters included.
 
-use super::pass::PassBuf;
-use super::plan::{Interval, Plan};
+use super::PassBuf;
 use crate::integrate::{
     dp45_step_with, rk4_step_with, Coeffs, Dp45Outcome, ErrScale, State, DP45_B, DP45_C, RK4_B,
     RK4_C,
 };
 use crate::math::{mat_skew, mat_t_vec, mat_vec, Real};
-use crate::robot::TendonPath;
+use crate::statics::plan::{Interval, Plan, RoutedCable};
 use nalgebra::Vector3;
 
 /// Continuous tendons active on one interval that the fixed-size buffers hold.
 pub(crate) const MAX_ROUTED: usize = 16;
-
-/// One continuously routed cable as the plan sees it.
-#[derive(Clone, Debug)]
-pub(crate) struct RoutedCable {
-    /// Index into `robot.cables`.
-    pub cable: usize,
-    pub path: TendonPath,
-    /// Arc length where it ends (m).
-    pub end_s: f64,
-}
 
 /// The continuous tendons over one interval, with their tensions (load scale applied).
 pub(crate) struct Active<T: Real> {
@@ -270,7 +259,7 @@ fn field<T: Real>(
 /// Solve `k x = rhs` in place for a symmetric positive definite `N x N` matrix
 /// (`L D L^T` without pivoting). `N` is a constant (6 for the Cosserat rod, 3 for the
 /// Kirchhoff rod) so the loops unroll: with a runtime size this solve was 45 % of a
-/// routed RHS evaluation (callgrind on `till_warm_ramp`, session 7).
+/// routed RHS evaluation (callgrind on `till_warm_ramp`).
 // index loops over a symmetric matrix read the lower triangle of other rows
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
