@@ -3,9 +3,9 @@
 //! state, `src/calibrate/readings_sens.rs`) against the checked central
 //! differences of the rows' converged poses (`calibrate::finite_differences`, the
 //! model's sensitivities before), on the stored FTDCR v4 calibration: nine
-//! displacement-driven tendons, its seven parameters (series stiffness,
-//! pretension, three section moduli, and the readings conditioning's time offset
-//! and backlash, whose `dq/dp` both methods take from the same central difference
+//! displacement-driven tendons, its eight parameters (series stiffness,
+//! pretension, the rod's modulus, the guide mass, two components of gravity, and the
+//! readings conditioning's time offset and backlash, whose `dq/dp` both methods take from the same central difference
 //! of the conditioned readings), on rows of `train.csv` solved warm in sequence.
 //!
 //! Tolerance per parameter: `max_i |exact_i - fd_i| <= 1e-4 max_i |fd_i|` for the
@@ -57,7 +57,7 @@ fn exact_sensitivities_equal_central_differences_on_ftdcr_v4() {
     let values = model.values().to_vec();
     let steps: Vec<f64> = params.iter().map(|p| settings.fd_step * p.scale).collect();
     let n = values.len();
-    assert_eq!(n, 7);
+    assert_eq!(n, 8);
 
     let mut exact = Sensitivities::default();
     model

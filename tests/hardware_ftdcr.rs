@@ -1,12 +1,12 @@
 //! The hardware benchmark: the stored calibration of the real FTDCR v4
 //! (`data/calibration/ftdcr_v4_calibrated.toml`, fitted on the 1620 rows of
 //! `train.csv`, with the readings conditioning: a time offset between servo log and
-//! capture and a backlash, `[readings] time_offset_s`, `backlash_m`, and one Young's
-//! modulus per section) predicts the held-out `val.csv` (443 rows, never used in
+//! capture and a backlash, `[readings] time_offset_s`, `backlash_m`; one Young's
+//! modulus for the rod, the guide mass and the gravity direction, the model grouped
+//! cross-validation on train.csv chose) predicts the held-out `val.csv` (443 rows, never used in
 //! the fit) from the servo readings alone, warm-started row to row. Asserted: the
 //! val tip RMSE with the upstream convention (mean offset removed) is within 10 %
-//! of the figure the calibration stored (`ftdcr_v4_summary.json`: 5.43 mm, raw
-//! 5.60 mm), below the published upstream model's 12.1 mm
+//! of the figure the calibration stored (`ftdcr_v4_summary.json`: 5.73 mm), below the published upstream model's 12.1 mm
 //! (`data/hardware/ftdcr_v4/README.md`) and below the target of 6 mm. The
 //! warm-started chain of `track` (`validation::track_errors`, conditioning from a
 //! per-stream state) reaches the same val error.

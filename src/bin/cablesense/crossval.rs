@@ -220,9 +220,20 @@ fn print_table(folds: &Folds, results: &[(String, Vec<String>, CrossValidation)]
     }
     println!();
     if let Some(i) = best {
-        println!(
-            "selected by the training data: {} (lowest pooled held-out RMSE)",
-            results[i].0
-        );
+        println!("lowest pooled held-out RMSE: {} (* above)", results[i].0);
+        // candidates the data cannot tell apart: within 1 % of the lowest
+        let lowest = results[i].2.pooled_rmse_m;
+        let tied: Vec<&str> = results
+            .iter()
+            .filter(|r| r.2.pooled_rmse_m <= 1.01 * lowest)
+            .map(|r| r.0.as_str())
+            .collect();
+        if tied.len() > 1 {
+            println!(
+                "within 1 % of it (not told apart by these data; prefer the fewest free \
+                 parameters and values inside their physical ranges): {}",
+                tied.join(", ")
+            );
+        }
     }
 }
