@@ -104,6 +104,7 @@ impl ReadingsModel {
     ) -> Result<Self, CalibrationError> {
         let ws = scene
             .tendon_workspace()
+            .map(TendonWorkspace::without_rollback)
             .map_err(model_err("scene".into()))?;
         let columns = ws
             .columns()
@@ -181,6 +182,7 @@ impl Clone for ReadingsModel {
             ws: self
                 .scene
                 .tendon_workspace()
+                .map(TendonWorkspace::without_rollback)
                 .expect("the scene this model was built from is valid"),
             q: self.q.clone(),
             cold: true,
@@ -202,6 +204,7 @@ impl CalibrationModel for ReadingsModel {
         let scene = patched_scene(&self.scene, &self.params, values)?;
         self.ws = scene
             .tendon_workspace()
+            .map(TendonWorkspace::without_rollback)
             .map_err(model_err(format!("scene with {values:?}")))?;
         self.values = values.to_vec();
         self.cold = true;

@@ -245,3 +245,23 @@ pub(crate) enum PassError {
     /// length did not settle.
     Coupling(f64),
 }
+
+crate::math::warm::warm_by_copy!(Pose, Sample);
+
+impl crate::math::warm::WarmCopy for Recording {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [samples, guides, section_tips], keep: []);
+    }
+}
+
+impl<T: Real + crate::math::warm::WarmCopy> crate::math::warm::WarmCopy for PassBuf<T> {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [
+            x, theta, res, holes, lengths, lengths_ck, arc_t, arc_act, arc_corr, arc_corr_g,
+            rhs_evals, retries, local_tol, next, mlin, mlin_terms, mlin_valid, seg_map,
+            seg_map_valid, jump_b, settle_u, settle_v, settle_n, settle_tmp, prev_err,
+            prev_step, anchor, dnext, dnext_valid, z_anchor, dz, sweep_c0, sweep_w, lin,
+            watch, conjugate_at,
+        ], keep: []);
+    }
+}
