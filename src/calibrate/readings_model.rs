@@ -106,6 +106,14 @@ impl ReadingsModel {
             .tendon_workspace()
             .map(TendonWorkspace::without_rollback)
             .map_err(model_err("scene".into()))?;
+        if let Some(s) = marker_s {
+            let length = ws.workspace().robot().length();
+            if !(0.0..=length).contains(&s) {
+                return Err(CalibrationError::BadInput(format!(
+                    "marker arc length {s} m is outside the robot [0, {length}] m"
+                )));
+            }
+        }
         let columns = ws
             .columns()
             .iter()
