@@ -1,8 +1,8 @@
 //! No heap allocation per row after warm-up for the load estimator on a tendon robot
 //! (`estimate::TendonLoadEstimator::tick`, STYLE.md "Hot paths for a control loop"):
 //! a counting `#[global_allocator]` (`tests/alloc_counter`) counts the
-//! allocations this thread makes while counting is on (per thread: the tests of
-//! this file may run in parallel). A second test counts the tendon solve's rollback.
+//! allocations this thread makes while counting is on. One test only in this file
+//! (the allocator is process-wide).
 
 mod alloc_counter;
 use alloc_counter::counted;
@@ -39,47 +39,4 @@ fn tendon_load_tick_does_not_allocate_after_warm_up() {
         "{statuses:?}"
     );
     assert_eq!(n, 0, "{n} allocations ({bytes} bytes) in 30 rows");
-}
-
-/// The rollback (`TendonWorkspace::set_rollback`, on by default) adds no allocation:
-/// on the FTDCR v4 val rows, after 20 warm-up rows, 60 warm rows with an
-/// unreachable row after every 10th allocate nothing, the rows that restore the
-/// kept state included. (The unreachable rows themselves are counted apart: the
-/// nested fallback they end in is not yet allocation-free.)
-#[test]
-fn tendon_rollback_does_not_allocate() {
-    let scene = Scene::load("data/scenes/ftdcr_v4.toml").unwrap();
-    let mut ws = scene.tendon_workspace().unwrap();
-    assert!(ws.rollback());
-    let mut p = scene.readings_parser(&ws);
-    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .enumerate()
-        .filter_map(|(i, l)| p.line(i + 1, l).unwrap())
-        .map(|r| r.readings_m)
-        .collect();
-    let bad = [0.05, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    for q in &rows[..20] {
-        ws.solve_readings(q).unwrap();
-    }
-    let (mut good_allocs, mut bad_allocs, mut restored) = (0, 0, 0);
-    for (k, q) in rows[20..80].iter().enumerate() {
-        let pending = ws.rollback_pending();
-        let (n, _) = counted(|| {
-            assert!(ws.solve_readings(q).unwrap().status.is_converged());
-        });
-        good_allocs += n;
-        restored += usize::from(pending);
-        if k % 10 == 9 {
-            let (n, _) = counted(|| {
-                assert!(!ws.solve_readings(&bad).unwrap().status.is_converged());
-            });
-            bad_allocs += n;
-            assert!(ws.rollback_pending());
-        }
-    }
-    assert_eq!(restored, 6);
-    eprintln!("unreachable rows: {bad_allocs} allocations in 6");
-    assert_eq!(good_allocs, 0, "{good_allocs} allocations in 60 rows");
 }
