@@ -114,3 +114,35 @@ fn the_failed_attempt_is_readable_until_the_next_solve() {
     assert_eq!(a, b);
     assert_eq!(ws.tip_position(), clean.tip_position());
 }
+
+/// What the rollback's copy costs per row: the 443 val rows solved warm with the
+/// rollback on and off, alternated (`cargo test --release --test integration
+/// rollback_cost -- --ignored --nocapture`; figures in docs/control-loop.md).
+#[test]
+#[ignore]
+fn rollback_cost() {
+    let (scene, rows) = val_rows();
+    let mut on = scene.tendon_workspace().expect("workspace");
+    let mut off = scene
+        .tendon_workspace()
+        .expect("workspace")
+        .without_rollback();
+    let (mut t_on, mut t_off) = (Vec::new(), Vec::new());
+    for _ in 0..6 {
+        for (ws, t) in [(&mut on, &mut t_on), (&mut off, &mut t_off)] {
+            let t0 = std::time::Instant::now();
+            for q in &rows {
+                ws.solve_readings(q).expect("valid readings");
+            }
+            t.push(t0.elapsed().as_secs_f64() / rows.len() as f64 * 1e6);
+        }
+    }
+    t_on.sort_by(f64::total_cmp);
+    t_off.sort_by(f64::total_cmp);
+    eprintln!(
+        "us per warm row, median of 6 passes over {} rows: rollback on {:.1}, off {:.1} (on {t_on:.1?}, off {t_off:.1?})",
+        rows.len(),
+        t_on[3],
+        t_off[3]
+    );
+}

@@ -539,9 +539,9 @@ pub unsafe extern "C" fn cs_estimator_cable_count(e: *const CsEstimator) -> usiz
 
 /// One sample: `changes[n]` cable length changes (m; NaN = missing, an infinite
 /// one is `CS_CODE_BAD_ARGUMENT`), `sigma[n]` noise per cable (m; each finite and
-/// > 0, else `CS_CODE_BAD_ARGUMENT` naming it) or null (the scene's `noise_m` for
-/// every cable). A null `changes` is reported as such. The outcome is in `*info`
-/// (may be null). No allocation after the first tick.
+/// positive, else `CS_CODE_BAD_ARGUMENT` naming it) or null (the scene's `noise_m`
+/// for every cable). A null `changes` is reported as such. The outcome is in
+/// `*info` (may be null). No allocation after the first tick.
 ///
 /// # Safety
 /// `e` is a live handle; `changes` (and `sigma` unless null) hold `n` doubles.
