@@ -137,6 +137,19 @@ fn rollback_cost() {
             t.push(t0.elapsed().as_secs_f64() / rows.len() as f64 * 1e6);
         }
     }
+    // the copy alone: restore the kept state after an unreachable row, 50 times
+    let mut copy = Vec::new();
+    for _ in 0..50 {
+        on.solve_readings(&UNREACHABLE).expect("valid readings");
+        let t0 = std::time::Instant::now();
+        on.apply_rollback();
+        copy.push(t0.elapsed().as_secs_f64() * 1e6);
+    }
+    copy.sort_by(f64::total_cmp);
+    eprintln!(
+        "one copy of the warm state: median {:.1} us, min {:.1} us",
+        copy[25], copy[0]
+    );
     t_on.sort_by(f64::total_cmp);
     t_off.sort_by(f64::total_cmp);
     eprintln!(
