@@ -1454,3 +1454,141 @@ fn scene_tension_beyond_the_axial_stiffness_names_the_tension() {
     );
     assert!(!r.stdout.contains("Converged"), "{}", r.stdout);
 }
+
+// ---------------------------------------------------------------------------------
+// Issue 43: values checked once at the boundary
+// ---------------------------------------------------------------------------------
+
+/// A base angle of 1e300 deg and a precurvature of 1e6 1/m were accepted and then
+/// diagnosed as numerical trouble blaming the payload: now range errors naming
+/// the field.
+#[test]
+fn scene_angle_and_precurvature_out_of_range_name_the_field() {
+    let text = scene_with(DEMO, "angle_deg = 90.0", "angle_deg = 1e300");
+    let r = solve_scene("angle", "s.toml", &text);
+    assert_error(&r, &["robot.base.angle_deg", "out of range", "360"]);
+    let text = scene_with(
+        DEMO,
+        "density_kg_m3 = 6800.0",
+        "density_kg_m3 = 6800.0\nprecurvature_per_m = [1e6, 0.0, 0.0]",
+    );
+    let r = solve_scene("precurv", "s.toml", &text);
+    assert_error(
+        &r,
+        &["robot.sections[0].precurvature_per_m", "two full turns"],
+    );
+    // a gentle precurvature (1 rad over the section) is fine
+    let text = scene_with(
+        DEMO,
+        "density_kg_m3 = 6800.0",
+        "density_kg_m3 = 6800.0\nprecurvature_per_m = [5.0, 0.0, 0.0]",
+    );
+    assert_eq!(solve_scene("precurv_ok", "s.toml", &text).code, 0);
+}
+
+/// `--noise -1` reached clap as "unexpected argument '-1'"; negative numbers are
+/// values now and the option's range check names it.
+#[test]
+fn negative_option_values_reach_the_range_check() {
+    let text = recording(|_, l| Some(l.into()));
+    let r = calibrate("negnoise", &text, &["--noise", "-1"]);
+    assert_error(&r, &["noise", "-1"]);
+    assert!(!r.stderr.contains("unexpected argument"), "{}", r.stderr);
+}
+
+/// `--marker-s` beyond the robot and `--train-rows` beyond the data were clamped
+/// silently; a start value outside `--param` bounds blamed `guides.mass_kg`.
+#[test]
+fn calibrate_options_outside_the_data_are_errors() {
+    let ftdcr = repo("data/calibration/ftdcr_v4_calibrated.toml");
+    let val = repo("data/hardware/ftdcr_v4/val.csv");
+    let dir = TempDir::new("calopts");
+    let out = dir.0.join("out").display().to_string();
+    let base = ["calibrate", &ftdcr, "--data", &val, "--out", &out];
+    let with = |extra: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        run(&a)
+    };
+    let r = with(&["--marker-s", "99"]);
+    assert_error(&r, &["marker arc length 99 m is outside the robot"]);
+    let r = with(&["--train-rows", "0..100000"]);
+    assert_error(&r, &["--train-rows 0..100000", "outside the 443 data rows"]);
+    let text = recording(|_, l| Some(l.into()));
+    let r = calibrate(
+        "parambounds",
+        &text,
+        &["--param", "robot/sections/0/youngs_modulus_pa:1:2"],
+    );
+    assert_error(
+        &r,
+        &[
+            "parameter robot/sections/0/youngs_modulus_pa",
+            "outside its bounds [1, 2]",
+        ],
+    );
+    assert!(!r.stderr.contains("mass_kg"), "{}", r.stderr);
+}
+
+/// `demo write DIR` overwrote edited files without a word: now it refuses unless
+/// `--force`, and writes nothing.
+#[test]
+fn demo_write_refuses_to_overwrite_without_force() {
+    let dir = TempDir::new("demowrite");
+    let target = dir.0.join("d").display().to_string();
+    assert_eq!(run(&["demo", "write", &target]).code, 0);
+    let scene = dir.0.join("d/scenes/demo_two_section.toml");
+    std::fs::write(&scene, "# edited\n").unwrap();
+    let r = run(&["demo", "write", &target]);
+    assert_error(&r, &["exist already", "--force"]);
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), "# edited\n");
+    assert_eq!(run(&["demo", "write", &target, "--force"]).code, 0);
+    assert_ne!(std::fs::read_to_string(&scene).unwrap(), "# edited\n");
+}
+
+/// A duplicated column (`t_s,top,top,...`) silently used its last copy: now the
+/// header is refused naming both positions (encoder stream: fatal; recording: the
+/// calibration stops).
+#[test]
+fn duplicate_column_is_refused_naming_both_positions() {
+    let (r, rows) = track_rows(&format!("t_s,top,left,top\n{ENC_GOOD}"));
+    assert_eq!(r.code, 1, "{}", r.stderr);
+    assert_row_error(
+        &rows,
+        1,
+        "header",
+        &["`top` is given twice (columns 2 and 4)"],
+    );
+    let text = recording(|i, l| {
+        Some(if i == 1 {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            let first = cells[1];
+            cells.push(first);
+            cells.join(",")
+        } else {
+            l.to_string() + ",0"
+        })
+    });
+    let r = calibrate("dupcol", &text, &[]);
+    assert_error(&r, &["rec.csv:1", "column given twice (columns 2 and "]);
+}
+
+/// A 10 MB bad cell was echoed whole in the error line: now its start and length.
+#[test]
+fn long_bad_cell_is_shortened_in_the_message() {
+    let cell = "x".repeat(100_000);
+    let (r, rows) = track_rows(&format!("{ENC_HEADER}0.0,0,0,{cell}\n{ENC_GOOD}"));
+    assert_eq!(r.code, 0);
+    assert_row_error(
+        &rows,
+        2,
+        "right",
+        &["... (100000 characters)` is not a number"],
+    );
+    assert!(
+        r.stdout.len() < 10_000,
+        "{} bytes of output",
+        r.stdout.len()
+    );
+    assert_good_row(&rows, 3);
+}

@@ -53,6 +53,7 @@ mod reach_cables;
 mod reach_elastica;
 mod reach_follower;
 mod repro_reliability;
+mod rollback;
 mod scene_errors;
 mod settings_matrix;
 mod soak_faults;

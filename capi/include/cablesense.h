@@ -13,7 +13,13 @@
  * cs_tendons_tensions, cs_tendons_tip_position, cs_tendons_cable_lengths and a
  * warm cs_tendons_solve; cs_model_tip_pose,
  * cs_model_section_poses and cs_tendons_section_poses recompute the shape and
- * allocate. */
+ * allocate.
+ *
+ * Threads: one handle is used by one thread at a time (lock around calls that
+ * share a handle); different handles on different threads need no lock.
+ * Rollback: a cs_tendons_solve that does not converge is not the next solve's
+ * warm start (the handle returns to its state before it). Names in order:
+ * cs_tendons_column_name, cs_estimator_unknown_name. Version: cs_version. */
 
 #ifndef CABLESENSE_H
 #define CABLESENSE_H
@@ -83,6 +89,10 @@ typedef struct CsTendonInfo {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// The version of this library (`MAJOR.MINOR.PATCH`), a static NUL-terminated
+// string (never null, never freed).
+const char *cs_version(void);
 
 // Message of the last failed call on this thread (empty if none). Valid until the
 // next failing call on the same thread; never null.
@@ -172,14 +182,25 @@ void cs_estimator_free(struct CsEstimator *e);
 // `e` is a live handle or null.
 size_t cs_estimator_unknown_count(const struct CsEstimator *e);
 
+// Name of unknown `i` (`0 <= i <` [`cs_estimator_unknown_count`], the order of
+// the values of [`cs_estimator_values`]), e.g. `tip_force_x`: a NUL-terminated
+// string owned by the handle (valid until [`cs_estimator_free`]), or null for a
+// null handle or `i` out of range.
+//
+// # Safety
+// `e` is a live handle or null.
+const char *cs_estimator_unknown_name(const struct CsEstimator *e, size_t i);
+
 // Number of cables, or 0 for a null handle.
 //
 // # Safety
 // `e` is a live handle or null.
 size_t cs_estimator_cable_count(const struct CsEstimator *e);
 
-// One sample: `changes[n]` cable length changes (m; NaN = missing), `sigma[n]`
-// noise per cable (m; NaN = the scene's `noise_m`) or null. The outcome is in
+// One sample: `changes[n]` cable length changes (m; NaN = missing, an infinite
+// one is `CS_CODE_BAD_ARGUMENT`), `sigma[n]` noise per cable (m; each finite and
+// positive, else `CS_CODE_BAD_ARGUMENT` naming it) or null (the scene's `noise_m`
+// for every cable). A null `changes` is reported as such. The outcome is in
 // `*info` (may be null). No allocation after the first tick.
 //
 // # Safety
@@ -232,6 +253,15 @@ void cs_tendons_free(struct CsTendons *t);
 // `t` is a live handle or null.
 size_t cs_tendons_count(const struct CsTendons *t);
 
+// Readings column of driven tendon `i` (`0 <= i <` [`cs_tendons_count`], the
+// order of the readings [`cs_tendons_solve`] takes), e.g. `s1a`: a
+// NUL-terminated string owned by the handle (valid until [`cs_tendons_free`]), or
+// null for a null handle or `i` out of range.
+//
+// # Safety
+// `t` is a live handle or null.
+const char *cs_tendons_column_name(const struct CsTendons *t, size_t i);
+
 // Number of cables (driven or not), or 0 for a null handle.
 //
 // # Safety
@@ -247,7 +277,7 @@ size_t cs_tendons_section_count(const struct CsTendons *t);
 // Solve one row of readings: `readings[n]` (m, positive = pulled in, one per
 // driven tendon, `n` = [`cs_tendons_count`]). `warm != 0` starts from the previous
 // solve. A reading that is not finite or pulls in more than the whole tendon is
-// `CS_BAD_ARGUMENT` with a message naming it (`readings[2] (s1c) ...`), and the
+// `CS_CODE_BAD_ARGUMENT` with a message naming it (`readings[2] (s1c) ...`), and the
 // solver keeps its previous state. The outcome is in `*info` (may be null). The
 // warm solve allocates nothing.
 //

@@ -22,6 +22,20 @@
 //! nor does a warm [`cs_tendons_solve`]; [`cs_model_section_poses`], [`cs_model_tip_pose`] and
 //! [`cs_tendons_section_poses`] recompute the shape and allocate.
 //!
+//! Threads: a handle is used by one thread at a time. Calls on the same handle from
+//! two threads at once need a lock around them (the handle's warm state is mutated
+//! by every solve and tick, with no lock inside); different handles on different
+//! threads run concurrently without any (handles share no state, and the
+//! last-error message is per thread: `cs_last_error` gives the calling thread's).
+//! A handle may move between threads. [`cs_version`] is callable from any thread.
+//! `capi/tests/threads.rs` runs two handles on two threads against one thread's
+//! results.
+//!
+//! Rollback: a [`cs_tendons_solve`] that does not converge does not become the next
+//! solve's warm start: the handle returns to its state before that solve (the
+//! library's `TendonWorkspace::set_rollback`), so the rows after it give the
+//! results they would without it (`capi/tests/rollback.rs`).
+//!
 //! The header `capi/include/cablesense.h` is generated from this file by cbindgen
 //! (`capi/cbindgen.toml`); `capi/tests/header.rs` fails when it is out of date.
 
@@ -96,6 +110,8 @@ pub struct CsModel {
 /// Estimator handle; buffers sized once.
 pub struct CsEstimator {
     est: Estimator,
+    /// Unknown names, NUL-terminated ([`cs_estimator_unknown_name`]).
+    names: Vec<CString>,
     lengths: Vec<f64>,
     changes: Vec<f64>,
     sigma: Vec<f64>,
@@ -104,7 +120,34 @@ pub struct CsEstimator {
 /// Tendon readings solver handle; the readings buffer is sized once.
 pub struct CsTendons {
     ws: TendonWorkspace,
+    /// Readings column names, NUL-terminated ([`cs_tendons_column_name`]).
+    columns: Vec<CString>,
     readings: Vec<f64>,
+}
+
+/// Names as C strings (a name with a NUL byte cannot be one: a scene error).
+fn c_names(names: &[String]) -> Result<Vec<CString>, (CsCode, String)> {
+    names
+        .iter()
+        .map(|n| {
+            CString::new(n.as_str())
+                .map_err(|_| (CsCode::BadScene, format!("name {n:?} contains a NUL byte")))
+        })
+        .collect()
+}
+
+/// The `i`th name of `names` as a C string pointer, null when out of range.
+fn name_ptr(names: Option<&[CString]>, i: usize) -> *const c_char {
+    names
+        .and_then(|n| n.get(i))
+        .map_or(std::ptr::null(), |n| n.as_ptr())
+}
+
+/// The version of this library (`MAJOR.MINOR.PATCH`), a static NUL-terminated
+/// string (never null, never freed).
+#[no_mangle]
+pub extern "C" fn cs_version() -> *const c_char {
+    concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()
 }
 
 thread_local! {
@@ -430,7 +473,9 @@ pub unsafe extern "C" fn cs_estimator_new(
         let c = robot.cables().len();
         let est = Estimator::new(robot, scene.loads, scene.numerics, spec)
             .map_err(|e| (CsCode::BadScene, e.to_string()))?;
+        let names = c_names(est.names())?;
         let h = CsEstimator {
+            names,
             est,
             lengths: vec![0.0; c],
             changes: vec![0.0; c],
@@ -466,6 +511,22 @@ pub unsafe extern "C" fn cs_estimator_unknown_count(e: *const CsEstimator) -> us
     unsafe { e.as_ref() }.map_or(0, |e| e.est.theta().len())
 }
 
+/// Name of unknown `i` (`0 <= i <` [`cs_estimator_unknown_count`], the order of
+/// the values of [`cs_estimator_values`]), e.g. `tip_force_x`: a NUL-terminated
+/// string owned by the handle (valid until [`cs_estimator_free`]), or null for a
+/// null handle or `i` out of range.
+///
+/// # Safety
+/// `e` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_estimator_unknown_name(
+    e: *const CsEstimator,
+    i: usize,
+) -> *const c_char {
+    // SAFETY: live handle or null.
+    name_ptr(unsafe { e.as_ref() }.map(|e| &e.names[..]), i)
+}
+
 /// Number of cables, or 0 for a null handle.
 ///
 /// # Safety
@@ -476,8 +537,10 @@ pub unsafe extern "C" fn cs_estimator_cable_count(e: *const CsEstimator) -> usiz
     unsafe { e.as_ref() }.map_or(0, |e| e.lengths.len())
 }
 
-/// One sample: `changes[n]` cable length changes (m; NaN = missing), `sigma[n]`
-/// noise per cable (m; NaN = the scene's `noise_m`) or null. The outcome is in
+/// One sample: `changes[n]` cable length changes (m; NaN = missing, an infinite
+/// one is `CS_CODE_BAD_ARGUMENT`), `sigma[n]` noise per cable (m; each finite and
+/// positive, else `CS_CODE_BAD_ARGUMENT` naming it) or null (the scene's `noise_m`
+/// for every cable). A null `changes` is reported as such. The outcome is in
 /// `*info` (may be null). No allocation after the first tick.
 ///
 /// # Safety
@@ -494,8 +557,11 @@ pub unsafe extern "C" fn cs_estimator_tick(
         // SAFETY: live handle or null.
         let h = unsafe { e.as_mut() }.ok_or_else(|| bad("estimator is null"))?;
         let c = h.lengths.len();
-        if n != c || changes.is_null() {
-            return Err(bad(format!("n = {n} changes (non-null) for {c} cables")));
+        if changes.is_null() {
+            return Err(bad("changes is null"));
+        }
+        if n != c {
+            return Err(bad(format!("n = {n} changes for {c} cables")));
         }
         // SAFETY: n doubles per the contract.
         h.changes
@@ -506,6 +572,10 @@ pub unsafe extern "C" fn cs_estimator_tick(
             h.sigma
                 .copy_from_slice(unsafe { std::slice::from_raw_parts(sigma, n) });
         }
+        // the strict boundary (`Estimator::check_sample`): no allocation unless it fails
+        h.est
+            .check_sample(&h.changes, with_sigma.then_some(&h.sigma[..]))
+            .map_err(|e| bad(e.to_string()))?;
         let status = h.est.tick(&h.changes, with_sigma.then_some(&h.sigma[..]));
         // RMS of the weighted residuals, as `Estimate::rms_sigma`
         h.est.model().cable_lengths_into(&mut h.lengths);
@@ -639,6 +709,7 @@ pub unsafe extern "C" fn cs_tendons_new(
             ));
         }
         let h = CsTendons {
+            columns: c_names(ws.columns())?,
             readings: vec![0.0; ws.driven().len()],
             ws,
         };
@@ -673,6 +744,19 @@ pub unsafe extern "C" fn cs_tendons_count(t: *const CsTendons) -> usize {
     unsafe { t.as_ref() }.map_or(0, |t| t.readings.len())
 }
 
+/// Readings column of driven tendon `i` (`0 <= i <` [`cs_tendons_count`], the
+/// order of the readings [`cs_tendons_solve`] takes), e.g. `s1a`: a
+/// NUL-terminated string owned by the handle (valid until [`cs_tendons_free`]), or
+/// null for a null handle or `i` out of range.
+///
+/// # Safety
+/// `t` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_column_name(t: *const CsTendons, i: usize) -> *const c_char {
+    // SAFETY: live handle or null.
+    name_ptr(unsafe { t.as_ref() }.map(|t| &t.columns[..]), i)
+}
+
 /// Number of cables (driven or not), or 0 for a null handle.
 ///
 /// # Safety
@@ -696,7 +780,7 @@ pub unsafe extern "C" fn cs_tendons_section_count(t: *const CsTendons) -> usize 
 /// Solve one row of readings: `readings[n]` (m, positive = pulled in, one per
 /// driven tendon, `n` = [`cs_tendons_count`]). `warm != 0` starts from the previous
 /// solve. A reading that is not finite or pulls in more than the whole tendon is
-/// `CS_BAD_ARGUMENT` with a message naming it (`readings[2] (s1c) ...`), and the
+/// `CS_CODE_BAD_ARGUMENT` with a message naming it (`readings[2] (s1c) ...`), and the
 /// solver keeps its previous state. The outcome is in `*info` (may be null). The
 /// warm solve allocates nothing.
 ///

@@ -438,7 +438,11 @@ fn estimator(text: &CStr, flags: u8, nums: &mut Numbers) {
                 status: -1,
                 ..CsEstimateInfo::default()
             };
-            ok(
+            // the strict boundary: an infinite change, or a sigma that is not finite
+            // and > 0, is a bad argument (NaN changes are missing ones)
+            let valid = changes[..c].iter().all(|x| !x.is_infinite())
+                && (sigma.is_empty() || sigma[..c].iter().all(|s| s.is_finite() && *s > 0.0));
+            expect(
                 cs_estimator_tick(
                     e,
                     changes.as_ptr(),
@@ -446,9 +450,14 @@ fn estimator(text: &CStr, flags: u8, nums: &mut Numbers) {
                     c,
                     info_ptr(flags, &mut info),
                 ),
+                if valid {
+                    &[CsCode::Ok]
+                } else {
+                    &[CsCode::BadArgument]
+                },
                 "cs_estimator_tick",
             );
-            if flags & NULL_INFO == 0 {
+            if valid && flags & NULL_INFO == 0 {
                 assert!((0..=6).contains(&info.status), "{info:?}");
                 assert!(info.poor_fit == 0 || info.poor_fit == 1, "{info:?}");
             }

@@ -403,6 +403,11 @@ impl PyEstimator {
                 }
             )));
         }
+        // the strict boundary: an infinite change or a sigma that is not finite and
+        // positive is an error, not a missing measurement
+        self.est
+            .check_sample(&self.changes, sigma.is_some().then_some(&self.sigma[..]))
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let (est, changes) = (&mut self.est, &self.changes);
         let sigma = sigma.is_some().then_some(&self.sigma[..]);
         if !snapshot {
@@ -475,6 +480,7 @@ impl PyEstimator {
 /// The module.
 #[pymodule]
 fn _cablesense(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<Scene>()?;
     m.add_class::<Solver>()?;
     m.add_class::<PyEstimator>()?;

@@ -250,6 +250,71 @@ def test_recording_streamed_row_by_row():
     assert np.allclose(batch["tensions"], [r["tensions"] for r in rows], atol=1e-6)
 
 
+
+def val_readings(scene):
+    """The FTDCR v4 val rows in m, in the solver's column order (via `solve_line`)."""
+    lines = (DATA / "hardware" / "ftdcr_v4" / "val.csv").read_text().splitlines()
+    reader = cablesense.TendonSolver(scene)
+    rows = [reader.solve_line(i, line) for i, line in enumerate(lines, start=1)]
+    return lines, np.array([r["readings"] for r in rows if r is not None])
+
+
+def test_version():
+    assert cablesense.__version__ == "0.1.0"
+
+
+def test_estimator_sample_is_checked_at_the_boundary():
+    # an infinite change is an error (not a missing one), as is a sigma that is
+    # not finite and positive; a NaN change is still a missing one
+    est = cablesense.Estimator(cablesense.Scene.from_file(TRACK))
+    ok = [1.7e-3, -2.4e-3, 2.5e-4]
+    with pytest.raises(ValueError, match=r"changes\[1\]"):
+        est.tick([1.7e-3, math.inf, 2.5e-4])
+    for bad in [0.0, -1e-5, math.nan, math.inf]:
+        with pytest.raises(ValueError, match=r"sigma\[0\]"):
+            est.tick(ok, sigma=[bad, 1e-5, 1e-5])
+    assert est.tick([1.7e-3, math.nan, 2.5e-4])["status"] != "no_data"
+
+
+def test_failed_row_is_rolled_back():
+    # the issue's case: a row no equilibrium reaches (50 mm on one tendon, the
+    # other eight held) between two passes over the val rows; the library rolls the
+    # solver back to its state before that row, so every good row after it is
+    # bit-identical to the same row without it (417 of 443 converged before)
+    scene = cablesense.Scene.from_file(FTDCR)
+    lines, Q = val_readings(scene)
+    assert Q.shape == (443, 9)
+    bad = [0.05] + [0.0] * 8
+    clean, faulty = cablesense.TendonSolver(scene), cablesense.TendonSolver(scene)
+    a1, b1 = clean.solve_many(Q), faulty.solve_many(Q)
+    assert not faulty.solve(bad)["report"]["converged"]
+    a2, b2 = clean.solve_many(Q), faulty.solve_many(Q)
+    assert b2["converged"].sum() == 443
+    for a, b in [(a1, b1), (a2, b2)]:
+        for key in ["tip", "section_tips", "tensions", "taut", "iterations"]:
+            assert np.array_equal(a[key], b[key]), key
+    # the same through `solve` row by row and through `solve_line` on the file
+    one = cablesense.TendonSolver(scene)
+    for i, q in enumerate(Q[:40]):
+        row = one.solve(q)
+        assert np.array_equal(row["tip"], a1["tip"][i]) and row["report"]["converged"]
+        if i == 10:
+            assert not one.solve(bad)["report"]["converged"]
+    stream, ref = cablesense.TendonSolver(scene), cablesense.TendonSolver(scene)
+    header = lines[0].split(",")
+    cells = ["0"] * len(header)
+    cells[header.index(stream.columns[0])] = "50"  # mm
+    bad_line = ",".join(cells)
+    for i, line in enumerate(lines, start=1):
+        a, b = ref.solve_line(i, line), stream.solve_line(i, line)
+        if a is None:
+            assert b is None
+            continue
+        assert np.array_equal(a["tip"], b["tip"]) and np.array_equal(a["tensions"], b["tensions"]), i
+        if i == 100:
+            assert not stream.solve_line(i, bad_line)["report"]["converged"]
+
+
 # --- calibration -----------------------------------------------------------------
 
 CAL = DATA / "calibration"

@@ -281,7 +281,7 @@ impl PullRecording {
                     .ok_or_else(|| bad("missing (short row)".into()))?;
                 let v: f64 = c
                     .parse()
-                    .map_err(|_| bad(format!("`{c}` is not a number")))?;
+                    .map_err(|_| bad(format!("`{}` is not a number", crate::files::shorten(c))))?;
                 if !v.is_finite() {
                     return Err(bad(format!("`{c}` is not finite")));
                 }

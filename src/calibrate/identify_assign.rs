@@ -152,6 +152,7 @@ fn model_grid(
 ) -> Result<Grid, IdentifyError> {
     let mut ws = scene
         .tendon_workspace()
+        .map(crate::tendons::TendonWorkspace::without_rollback)
         .map_err(|e| IdentifyError::Model(format!("scene: {e}")))?;
     let driven = ws.driven().to_vec();
     let n = ((q_range.1 - q_range.0) / step).ceil().max(1.0) as usize + 1;

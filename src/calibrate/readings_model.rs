@@ -104,7 +104,16 @@ impl ReadingsModel {
     ) -> Result<Self, CalibrationError> {
         let ws = scene
             .tendon_workspace()
+            .map(TendonWorkspace::without_rollback)
             .map_err(model_err("scene".into()))?;
+        if let Some(s) = marker_s {
+            let length = ws.workspace().robot().length();
+            if !(0.0..=length).contains(&s) {
+                return Err(CalibrationError::BadInput(format!(
+                    "marker arc length {s} m is outside the robot [0, {length}] m"
+                )));
+            }
+        }
         let columns = ws
             .columns()
             .iter()
@@ -181,6 +190,7 @@ impl Clone for ReadingsModel {
             ws: self
                 .scene
                 .tendon_workspace()
+                .map(TendonWorkspace::without_rollback)
                 .expect("the scene this model was built from is valid"),
             q: self.q.clone(),
             cold: true,
@@ -202,6 +212,7 @@ impl CalibrationModel for ReadingsModel {
         let scene = patched_scene(&self.scene, &self.params, values)?;
         self.ws = scene
             .tendon_workspace()
+            .map(TendonWorkspace::without_rollback)
             .map_err(model_err(format!("scene with {values:?}")))?;
         self.values = values.to_vec();
         self.cold = true;

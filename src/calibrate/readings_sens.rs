@@ -216,6 +216,7 @@ impl ReadingsModel {
                 } else {
                     let mut ws = scene
                         .tendon_workspace()
+                        .map(TendonWorkspace::without_rollback)
                         .map_err(model_err(format!("scene with {x:?}")))?;
                     ws.workspace_mut().set_local_tolerance(0.0);
                     let (mech, free0) = mechanics(&ws);

@@ -140,7 +140,7 @@ fn number(file: &str, line: usize, column: &str, cell: &str) -> Result<f64, Cali
             file,
             line,
             column.into(),
-            format!("`{cell}` is not a number"),
+            format!("`{}` is not a number", crate::files::shorten(cell)),
         )
     })?;
     if !v.is_finite() {
@@ -168,6 +168,14 @@ impl Layout {
         header: &[String],
         map: &ColumnMap,
     ) -> Result<Self, CalibrationError> {
+        if let Some((a, b, name)) = crate::files::duplicate_column(header) {
+            return Err(cell_err(
+                file,
+                header_line,
+                name,
+                format!("column given twice (columns {a} and {b})"),
+            ));
+        }
         let need = |c: &str| -> Result<String, CalibrationError> {
             if header.iter().any(|h| h == c) {
                 Ok(c.to_string())

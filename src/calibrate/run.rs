@@ -86,6 +86,15 @@ pub fn calibrate<M: CalibrationModel + Clone>(
                 p.name, p.scale, p.initial
             ));
         }
+        // a start outside the bounds is this parameter's error (clamping it to a
+        // bound, e.g. a modulus of 2 Pa, failed later in a model check that named
+        // another field)
+        if !(p.lower <= p.initial && p.initial <= p.upper) {
+            return bad(format!(
+                "parameter {}: start value {} (the scene's) is outside its bounds [{}, {}]; widen the bounds or start inside them",
+                p.name, p.initial, p.lower, p.upper
+            ));
+        }
     }
     let ns = params.len();
     let rows = &train.rows[..];

@@ -255,7 +255,7 @@ impl TendonLoadEstimator {
             }
         }
         let (loads, params) = sites(&spec, loads);
-        let tw = TendonWorkspace::with_params(robot, loads, settings, &params)?;
+        let tw = TendonWorkspace::with_params(robot, loads, settings, &params)?.without_rollback();
         let names = tw
             .driven()
             .iter()

@@ -7,6 +7,54 @@ use crate::statics::Start;
 use std::time::Instant;
 
 impl<M: EstimationModel> Estimator<M> {
+    /// Check one sample at the boundary, as the front ends (Python, C, the CLI's
+    /// readers) do before [`Estimator::tick`]: one change per channel, each finite or
+    /// `NaN` (missing); an infinite change is an error (not a missing one). `sigma`,
+    /// when given, one per channel, each finite and > 0 (a channel without a noise
+    /// figure is left out of `sigma` altogether, not given 0 or NaN). `tick` itself
+    /// still takes what this rejects as a missing measurement.
+    pub fn check_sample(
+        &self,
+        changes: &[f64],
+        sigma: Option<&[f64]>,
+    ) -> Result<(), crate::error::ModelError> {
+        use crate::error::ModelError;
+        if changes.len() != self.c {
+            return Err(ModelError::Invalid {
+                field: "changes".into(),
+                why: format!("{} values for {} channels", changes.len(), self.c),
+            });
+        }
+        if let Some(j) = changes.iter().position(|v| v.is_infinite()) {
+            return Err(ModelError::NonFinite {
+                field: format!("changes[{j}] (NaN marks a missing one)"),
+                value: changes[j],
+            });
+        }
+        if let Some(sigma) = sigma {
+            if sigma.len() != self.c {
+                return Err(ModelError::Invalid {
+                    field: "sigma".into(),
+                    why: format!("{} values for {} channels", sigma.len(), self.c),
+                });
+            }
+            if let Some(j) = sigma.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(if sigma[j].is_finite() {
+                    ModelError::NonPositive {
+                        field: format!("sigma[{j}]"),
+                        value: sigma[j],
+                    }
+                } else {
+                    ModelError::NonFinite {
+                        field: format!("sigma[{j}]"),
+                        value: sigma[j],
+                    }
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Process one sample: cable length changes (m, `NaN` = missing) and optional
     /// per-cable noise (m). Warm-started from the previous estimate; no allocation
     /// for the workspace methods.

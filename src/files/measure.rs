@@ -58,16 +58,20 @@ impl LineError {
 
 /// A cell (CSV) or value (JSON) of column `field` that must be a finite number.
 pub fn finite_cell(line: usize, field: &str, cell: &str) -> Result<f64, LineError> {
-    let v: f64 = cell
-        .parse()
-        .map_err(|_| LineError::new(line, field, format!("`{cell}` is not a number")))?;
+    let v: f64 = cell.parse().map_err(|_| {
+        LineError::new(
+            line,
+            field,
+            format!("`{}` is not a number", super::shorten(cell)),
+        )
+    })?;
     if v.is_finite() {
         Ok(v)
     } else {
         Err(LineError::new(
             line,
             field,
-            format!("`{cell}` is not finite"),
+            format!("`{}` is not finite", super::shorten(cell)),
         ))
     }
 }
@@ -158,6 +162,12 @@ impl StreamParser {
     fn csv(&mut self, line: usize, t: &str) -> Result<Option<Sample>, LineError> {
         let cells: Vec<&str> = t.split(',').map(str::trim).collect();
         let Some(cols) = &self.columns else {
+            if let Some((a, b, name)) = super::duplicate_column(&cells) {
+                let why = format!(
+                    "column `{name}` is given twice (columns {a} and {b}); the stream stops here"
+                );
+                return Err(self.header_err(line, "header".into(), why));
+            }
             let mut cols = Vec::with_capacity(cells.len());
             for c in &cells {
                 let col = if *c == "t_s" || *c == "t" {

@@ -222,6 +222,16 @@ impl ReadingsParser {
                     ),
                 ));
             }
+            if let Some((a, b, name)) = super::duplicate_column(&cells) {
+                self.header = None;
+                return Err(Self::err(
+                    line_no,
+                    "header",
+                    format!(
+                        "column `{name}` is given twice (columns {a} and {b}; waiting for a valid header)"
+                    ),
+                ));
+            }
             self.names = cells.iter().map(|c| c.to_string()).collect();
             let unknown = self.unknown_measurement_column(cells.iter().copied());
             let restart = self.header.replace(cols).is_some();

@@ -75,7 +75,7 @@ impl Table {
                     c.parse::<f64>().map_err(|_| TableError::Parse {
                         path: path.into(),
                         line: i + 1,
-                        why: format!("column `{name}`: `{c}` is not a number"),
+                        why: format!("column `{name}`: `{}` is not a number", super::shorten(c)),
                     })
                 })
                 .collect::<Result<Vec<f64>, _>>()?;

@@ -148,6 +148,13 @@ pub fn strains(y: &State<f64>, c: &Coeffs) -> (Vector3<f64>, Vector3<f64>) {
     (v, u)
 }
 
+impl<T: Real> crate::math::warm::WarmCopy for State<T> {
+    #[inline]
+    fn warm_copy_from(&mut self, src: &Self) {
+        *self = *src;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -114,11 +114,9 @@ impl Rung {
                 m.solve_readings(&zeros(robot))?;
                 Box::new(m)
             }
-            Self::Rod(s) => Box::new(TendonWorkspace::new(
-                robot.clone(),
-                loads.clone(),
-                s.clone(),
-            )?),
+            Self::Rod(s) => Box::new(
+                TendonWorkspace::new(robot.clone(), loads.clone(), s.clone())?.without_rollback(),
+            ),
         })
     }
 }

@@ -143,6 +143,12 @@ impl BandedLu {
     }
 }
 
+impl crate::math::warm::WarmCopy for BandedLu {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [n, kl, ku, w, a, piv], keep: []);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -217,6 +217,13 @@ impl<const N: usize> Real for Dual<N> {
     }
 }
 
+impl<const N: usize> crate::math::warm::WarmCopy for Dual<N> {
+    #[inline]
+    fn warm_copy_from(&mut self, src: &Self) {
+        *self = *src;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

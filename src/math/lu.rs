@@ -174,6 +174,12 @@ impl DenseLu {
     }
 }
 
+impl crate::math::warm::WarmCopy for DenseLu {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [n, a, piv, factorizations], keep: []);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

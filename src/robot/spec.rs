@@ -293,12 +293,29 @@ impl CableSpec {
     }
 }
 
+/// Largest `|robot.base.angle_deg|` (deg): one full turn either way; a larger value
+/// is a unit slip (radians read as degrees, or a value in another unit).
+pub const MAX_ANGLE_DEG: f64 = 360.0;
+
+/// Largest `|precurvature_per_m| * length_m` of a section (rad): two full turns
+/// (4 pi). A continuum robot's precurved section bends through at most about one
+/// turn; far beyond it the rod integration needs ever more steps and the failure
+/// was diagnosed as numerical.
+pub const MAX_PRECURVATURE_RAD: f64 = 4.0 * std::f64::consts::PI;
+
 impl RobotSpec {
     /// Check every field; errors name the field path and the value.
     pub fn validate(&self) -> Result<(), ModelError> {
         ModelError::finite3("robot.base.position_m", &self.base.position_m)?;
         ModelError::finite3("robot.base.axis", &self.base.axis)?;
         ModelError::finite("robot.base.angle_deg", self.base.angle_deg)?;
+        if self.base.angle_deg.abs() > MAX_ANGLE_DEG {
+            return Err(ModelError::OutOfRange {
+                field: "robot.base.angle_deg".into(),
+                value: self.base.angle_deg,
+                why: format!("a rotation angle is within [-{MAX_ANGLE_DEG}, {MAX_ANGLE_DEG}] deg"),
+            });
+        }
         if self.base.axis.iter().all(|x| *x == 0.0) {
             return Err(ModelError::Invalid {
                 field: "robot.base.axis".into(),
@@ -318,6 +335,19 @@ impl RobotSpec {
             s.material.validate(&f)?;
             ModelError::positive(format!("{f}.shear_coefficient"), s.shear_coefficient)?;
             ModelError::finite3(&format!("{f}.precurvature_per_m"), &s.precurvature_per_m)?;
+            let u = s.precurvature_per_m;
+            let turns = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt() * s.length_m;
+            if turns > MAX_PRECURVATURE_RAD {
+                return Err(ModelError::OutOfRange {
+                    field: format!("{f}.precurvature_per_m"),
+                    value: turns,
+                    why: format!(
+                        "|precurvature| x length_m (rad) must be at most {MAX_PRECURVATURE_RAD:.3} (two full turns of the section); |u| = {} 1/m over {} m",
+                        turns / s.length_m,
+                        s.length_m
+                    ),
+                });
+            }
             if let Some(g) = &s.guides {
                 g.validate(k, s.length_m)?;
             }

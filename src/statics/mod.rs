@@ -140,3 +140,5 @@ pub fn solve(
     ws.solve(Start::Cold);
     Ok(ws.solution())
 }
+
+crate::math::warm::warm_by_copy!(SolveReport);

@@ -387,3 +387,22 @@ fn max_abs(v: &[f64]) -> f64 {
 fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
+
+impl crate::math::warm::WarmCopy for Workspace {
+    /// Everything a solve changes; the robot, loads, settings and plan are
+    /// configuration (changed only by the caller) and stay as they are.
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [
+            x, x_trial, x_best, best_res, x_ok, x_prev, x_start, x_first, first_taken, x_tan,
+            tip_ok, tip_tan, tip_start, tip_first, last_intensity, tol, noise, branch_verdict,
+            dx, res, lu, broyden, use_broyden, secant, holes_aux, b64, b3, b6, wide, b_arc,
+            last_pass, has_solution, sens_s, sens_m, sens_col, dxdtheta, dxdtheta_valid,
+            lu_valid, tip, report, jac_evals, multi, multi_active,
+        ], keep: [robot, loads, settings, plan, multi_supported]);
+        // the plan is configuration but for the friction's capstan factors per
+        // chord, which a tendon solve updates (`set_chord_factors`)
+        for (a, b) in self.plan.cables.iter_mut().zip(&src.plan.cables) {
+            crate::math::warm::WarmCopy::warm_copy_from(&mut a.factor, &b.factor);
+        }
+    }
+}

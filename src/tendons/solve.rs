@@ -119,6 +119,34 @@ pub struct TendonWorkspace {
     x_ref: Vec<f64>,
     report: TendonReport,
     joint: joint::JointBufs,
+    /// The warm state to return to after a solve that did not converge.
+    rollback: Rollback,
+}
+
+crate::math::warm::warm_by_copy!(TendonReport);
+
+/// What a [`TendonWorkspace`] keeps to roll a failed solve back (the policy is on
+/// [`TendonWorkspace::set_rollback`]).
+#[derive(Clone)]
+struct Rollback {
+    enabled: bool,
+    /// The whole warm state at the start of the current solve: the state the last
+    /// converged solve left (or the reference), with the caller's changes since.
+    good: Option<Box<TendonWorkspace>>,
+    /// The last solve did not converge: the next solve (or change of the
+    /// workspace) starts from `good`.
+    pending: bool,
+}
+
+impl crate::math::warm::WarmCopy for TendonWorkspace {
+    /// The state a solve changes; the tendons' mechanics, columns, reference and the
+    /// rollback's own copy are configuration and stay as they are.
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [
+            ws, free, t, t_trial, taut, taut_before, g, step, theta, sens, lengths, lu,
+            sens_fresh, sign, last_q, factors, mean_factor, has_solution, report, joint,
+        ], keep: [driven, mech, columns, free0, geo, n_extra, mu, friction, x_ref, rollback]);
+    }
 }
 
 impl TendonWorkspace {
@@ -241,8 +269,15 @@ impl TendonWorkspace {
             },
             driven,
             mech,
+            rollback: Rollback {
+                enabled: true,
+                good: None,
+                pending: false,
+            },
         };
         me.reference()?;
+        // the rollback's copy: allocated once here, refreshed without allocating
+        me.rollback.good = Some(Box::new(me.clone()));
         Ok(me)
     }
 
@@ -291,6 +326,7 @@ impl TendonWorkspace {
     /// field, and the settings in effect stay as they were.
     pub fn set_tendon_settings(&mut self, settings: TendonSettings) -> Result<(), ModelError> {
         settings.validate()?;
+        self.apply_rollback();
         self.ws.set_tendon_settings(settings);
         Ok(())
     }
@@ -329,7 +365,11 @@ impl TendonWorkspace {
     pub fn workspace(&self) -> &Workspace {
         &self.ws
     }
-    /// The inner shooting workspace, mutable (e.g. to read a full `solution()`).
+    /// The inner shooting workspace, mutable (e.g. to read a full `solution()`: after
+    /// a solve that did not converge, the failed attempt's). To change its loads or
+    /// settings after such a solve, call [`TendonWorkspace::apply_rollback`] first
+    /// (else the rollback restores the solver's caches of the earlier loads under the
+    /// new ones).
     pub fn workspace_mut(&mut self) -> &mut Workspace {
         &mut self.ws
     }
@@ -348,6 +388,7 @@ impl TendonWorkspace {
     }
     /// Values of the extra load parameters (after the tensions).
     pub fn set_extra(&mut self, extra: &[f64]) {
+        self.apply_rollback();
         let p = self.driven.len();
         self.joint.forget_history();
         for (k, v) in extra.iter().enumerate().take(self.n_extra) {
@@ -396,14 +437,97 @@ impl TendonWorkspace {
         Ok(())
     }
 
+    /// Rollback policy (on by default). On: a solve that does not converge leaves
+    /// the warm state as it was before that solve, i.e. as the last converged solve
+    /// (or the construction's reference solve) left it, with any change the caller
+    /// made since (settings, extra parameters, loads through
+    /// [`TendonWorkspace::workspace_mut`]). The rows after a failed one are then
+    /// bit-identical to the same rows of a stream without it. The failed attempt
+    /// stays readable through the `&self` accessors ([`TendonWorkspace::report`],
+    /// [`TendonWorkspace::tip_position`], [`TendonWorkspace::tensions`],
+    /// [`TendonWorkspace::diagnose`], `workspace_mut().solution()`) until the next
+    /// solve, `set_extra`, `set_tendon_settings` or [`TendonWorkspace::apply_rollback`],
+    /// which first restore the kept state. The cost is one copy of the workspace's fixed-size state per solve
+    /// (no allocation). Off: the next solve starts from wherever the failed one
+    /// stopped (what a caller with its own policy, e.g. an estimator's inner
+    /// iterations, wants). Turning it off drops a pending rollback.
+    /// (Turning it on allocates the kept copy, off frees it.)
+    pub fn set_rollback(&mut self, on: bool) {
+        self.rollback.enabled = on;
+        if on {
+            if self.rollback.good.is_none() {
+                self.rollback.good = Some(Box::new(self.clone()));
+            }
+        } else {
+            self.rollback.pending = false;
+            self.rollback.good = None;
+        }
+    }
+
+    /// This workspace with the rollback off ([`TendonWorkspace::set_rollback`]).
+    pub fn without_rollback(mut self) -> Self {
+        self.set_rollback(false);
+        self
+    }
+
+    /// Whether the rollback policy is on ([`TendonWorkspace::set_rollback`]).
+    pub fn rollback(&self) -> bool {
+        self.rollback.enabled
+    }
+
+    /// The last solve did not converge and its warm state will be replaced by the
+    /// kept one at the next `&mut` call ([`TendonWorkspace::set_rollback`]).
+    pub fn rollback_pending(&self) -> bool {
+        self.rollback.pending
+    }
+
+    /// Restore the kept state now if a rollback is pending (no allocation).
+    pub fn apply_rollback(&mut self) {
+        use crate::math::warm::WarmCopy;
+        if !self.rollback.pending {
+            return;
+        }
+        self.rollback.pending = false;
+        if let Some(good) = self.rollback.good.take() {
+            WarmCopy::warm_copy_from(self, &*good);
+            self.rollback.good = Some(good);
+        }
+    }
+
+    /// Keep the current state as the one to return to (no allocation).
+    fn keep_state(&mut self) {
+        use crate::math::warm::WarmCopy;
+        if let Some(mut good) = self.rollback.good.take() {
+            WarmCopy::warm_copy_from(&mut *good, &*self);
+            self.rollback.good = Some(good);
+        }
+    }
+
     /// [`TendonWorkspace::solve_readings`] with a chosen start (`Cold` restarts the
     /// shooting from the straight rod and the tensions from the pretensions).
+    /// A solve that does not converge is rolled back before the next one
+    /// ([`TendonWorkspace::set_rollback`]); invalid readings are an error that
+    /// changes nothing.
     pub fn solve_readings_from(
         &mut self,
         readings_m: &[f64],
         start: Start,
     ) -> Result<TendonReport, ModelError> {
         self.check_readings(readings_m)?;
+        if self.rollback.enabled {
+            if self.rollback.pending {
+                self.apply_rollback();
+            } else {
+                self.keep_state();
+            }
+        }
+        let report = self.solve_checked(readings_m, start);
+        self.rollback.pending = self.rollback.enabled && !report.status.is_converged();
+        Ok(report)
+    }
+
+    /// The solve of checked readings.
+    fn solve_checked(&mut self, readings_m: &[f64], start: Start) -> TendonReport {
         let p = self.driven.len();
         // the free lengths the current point belongs to (joint path's continuation)
         self.joint.free_prev.copy_from_slice(&self.free);
@@ -449,7 +573,7 @@ impl TendonWorkspace {
             && self.refresh_factors()
         {
             self.joint.at_solution = true;
-            return Ok(self.finish());
+            return self.finish();
         }
         self.joint.at_solution = false;
         // a cold start takes the same path from the reference equilibrium (zero
@@ -467,11 +591,11 @@ impl TendonWorkspace {
             self.joint.rj.pending = true;
             if self.solve_joint() && self.refresh_factors() {
                 self.joint.at_solution = true;
-                return Ok(self.finish());
+                return self.finish();
             }
             self.joint.at_solution = false;
         }
-        Ok(self.solve_nested(start))
+        self.solve_nested(start)
     }
 
     fn finish(&mut self) -> TendonReport {

@@ -28,13 +28,9 @@ use serde::{Deserialize, Serialize};
 
 /// The warm-started chain of `track` on a tendon-driven scene.
 pub struct TrackChain {
+    /// The workspace, its rollback on: a row that does not converge is not the next
+    /// row's warm start ([`TendonWorkspace::set_rollback`]).
     ws: TendonWorkspace,
-    /// The workspace after the last converged row, whole (shooting unknowns, settled
-    /// holes, reused Jacobians), so that a rollback gives the next row exactly the
-    /// warm start it would have had without the failed row.
-    good: Option<TendonWorkspace>,
-    /// The last row did not converge: roll back to `good` before the next row.
-    restore: bool,
     /// Time offset and backlash state of the stream.
     history: ReadingsHistory,
     /// Its state before the row being stepped (restored when the row is rejected).
@@ -48,19 +44,19 @@ pub struct TrackChain {
 pub struct ChainStep {
     /// The solve of this row.
     pub report: TendonReport,
-    /// The row did not converge and a converged row exists: the next row starts
-    /// from that one, not from this row's state.
+    /// The row did not converge: the next row starts from the state before it (the
+    /// last converged row's, or the reference's), not from this row's state.
     pub fallback: bool,
 }
 
 impl TrackChain {
-    /// A chain on `ws` (warm from its reference solve), readings unconditioned.
-    pub fn new(ws: TendonWorkspace) -> Self {
+    /// A chain on `ws` (warm from its reference solve), readings unconditioned; the
+    /// workspace's rollback is turned on.
+    pub fn new(mut ws: TendonWorkspace) -> Self {
+        ws.set_rollback(true);
         let history = ReadingsHistory::new(Conditioning::default());
         Self {
             ws,
-            good: None,
-            restore: false,
             saved: history.clone(),
             history,
             time_column: "t_s".into(),
@@ -87,9 +83,9 @@ impl TrackChain {
     }
     /// Solve one row (readings in m, in the workspace's tendon order), warm-started
     /// from the previous row, or, when the previous row did not converge, from the
-    /// workspace rolled back to its whole state after the last converged row (one
-    /// clone per converged row), so rows after a failed one are bit-identical to a
-    /// stream without it. Invalid
+    /// workspace rolled back to its whole state after the last converged row (the
+    /// library's rollback, [`TendonWorkspace::set_rollback`]), so rows after a failed
+    /// one are bit-identical to a stream without it. Invalid
     /// readings are an error and leave the chain as it was.
     pub fn step(&mut self, readings_m: &[f64]) -> Result<ChainStep, ModelError> {
         self.step_at(None, readings_m)
@@ -119,22 +115,8 @@ impl TrackChain {
     }
 
     fn solve(&mut self, readings_m: &[f64]) -> Result<ChainStep, ModelError> {
-        if self.restore {
-            if let Some(g) = &self.good {
-                self.ws.clone_from(g);
-            }
-            self.restore = false;
-        }
         let report = self.ws.solve_readings(readings_m)?;
-        let fallback = !report.status.is_converged() && self.good.is_some();
-        if report.status.is_converged() {
-            match self.good.as_mut() {
-                Some(g) => g.clone_from(&self.ws),
-                None => self.good = Some(self.ws.clone()),
-            }
-        } else {
-            self.restore = self.good.is_some();
-        }
+        let fallback = self.ws.rollback_pending();
         Ok(ChainStep { report, fallback })
     }
 }

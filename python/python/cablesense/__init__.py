@@ -43,6 +43,7 @@ from ._cablesense import (
     predict_recording,
     solve,
     validate_thesis,
+    __version__,
 )
 
 __all__ = [
@@ -57,4 +58,5 @@ __all__ = [
     "predict_recording",
     "solve",
     "validate_thesis",
+    "__version__",
 ]

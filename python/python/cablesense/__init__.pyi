@@ -6,6 +6,8 @@ from typing import Any, Dict, List, Optional, Sequence, Union
 import numpy as np
 import numpy.typing as npt
 
+__version__: str
+
 class SceneError(ValueError):
     """A scene could not be read or is invalid."""
 

@@ -348,6 +348,13 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
         (Some(v), None) => (all, Some(load_recording(v, &map)?)),
         (None, Some(r)) => {
             let range = parse_row_range(r).map_err(|e| anyhow::anyhow!(e))?;
+            // rows outside the data are an error, not clamped (`A..` reads to the end)
+            let n = all.rows.len();
+            anyhow::ensure!(
+                range.start < n && (range.end == usize::MAX || range.end <= n),
+                "--train-rows {r}: outside the {n} data rows of {} (0..{n})",
+                data.display()
+            );
             let (t, v) = all.split_rows(range);
             (t, if v.rows.is_empty() { None } else { Some(v) })
         }

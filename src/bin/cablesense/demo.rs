@@ -18,8 +18,12 @@ enum Action {
     List,
     /// Copy every embedded file into DIR (scenes/, measurements/, thesis/).
     Write {
-        /// Target directory (created if missing; existing files are overwritten).
+        /// Target directory (created if missing).
         dir: PathBuf,
+        /// Overwrite files that exist (without it, an existing file is an error and
+        /// nothing is written).
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -31,7 +35,22 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 println!("{}{:<40} {}", demo::PREFIX, f.path, f.about);
             }
         }
-        Action::Write { dir } => {
+        Action::Write { dir, force } => {
+            if !force {
+                let existing: Vec<PathBuf> = demo::FILES
+                    .iter()
+                    .map(|f| f.path.split('/').fold(dir.clone(), |p, c| p.join(c)))
+                    .filter(|p| p.exists())
+                    .collect();
+                if let Some(first) = existing.first() {
+                    anyhow::bail!(
+                        "{}: {} of the demo files exist already (first: {}); nothing written (--force overwrites them)",
+                        dir.display(),
+                        existing.len(),
+                        first.display()
+                    );
+                }
+            }
             for p in demo::write_all(&dir)? {
                 println!("wrote {}", p.display());
             }

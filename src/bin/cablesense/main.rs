@@ -17,7 +17,7 @@ mod tendon_estimate;
 mod track;
 mod validate;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 #[derive(Parser)]
 #[command(
@@ -52,9 +52,27 @@ enum Command {
     Demo(demo::Args),
 }
 
+/// The command line with negative numbers taken as values in every subcommand
+/// (`--noise -1` reaches the option's range check instead of clap's "unexpected
+/// argument '-1'").
+fn command() -> clap::Command {
+    fn negatives(c: clap::Command) -> clap::Command {
+        let subs: Vec<String> = c
+            .get_subcommands()
+            .map(|s| s.get_name().to_string())
+            .collect();
+        let mut c = c.allow_negative_numbers(true);
+        for s in subs {
+            c = c.mut_subcommand(s, negatives);
+        }
+        c
+    }
+    negatives(Cli::command())
+}
+
 fn main() -> std::process::ExitCode {
     output::quiet_on_broken_pipe();
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
     // `println!` panics when stdout is a closed pipe (`cablesense ... | head`): the
     // hook above keeps that panic quiet, and it ends here as a quiet exit
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match cli.command {

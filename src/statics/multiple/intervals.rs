@@ -445,3 +445,18 @@ pub(super) fn new_rec(plan: &Plan) -> Rec {
             .collect(),
     }
 }
+
+crate::math::warm::warm_by_copy!(Piece);
+
+impl crate::math::warm::WarmCopy for Layout {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src,
+            copy: [pieces, nodes, design, width, end_disk, disk_node], keep: []);
+    }
+}
+
+impl crate::math::warm::WarmCopy for Rec {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [rec, holes], keep: []);
+    }
+}

@@ -340,3 +340,12 @@ fn max_abs(v: &[f64]) -> f64 {
 fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
+
+impl crate::math::warm::WarmCopy for Multi {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [
+            layout, nodes, trial, ok, ends, res, res_trial, dx, tan, moved, tan_prev, tan_ok,
+            lu, lu_valid, width, fresh, sign, last, has_solution, report, rhs_evals, jac_evals,
+        ], keep: []);
+    }
+}

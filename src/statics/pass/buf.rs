@@ -245,3 +245,34 @@ pub(crate) enum PassError {
     /// length did not settle.
     Coupling(f64),
 }
+
+crate::math::warm::warm_by_copy!(Pose, Sample);
+
+impl crate::math::warm::WarmCopy for Recording {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [samples, guides, section_tips], keep: []);
+    }
+}
+
+impl<T: Real + crate::math::warm::WarmCopy> crate::math::warm::WarmCopy for PassBuf<T> {
+    /// Everything, except the hole positions of a dual (sweep) buffer: a pass writes
+    /// each disk's holes before anything reads them, and in a sweep buffer (`T` wider
+    /// than `f64`) they are most of the buffer (nine cables through dozens of disks
+    /// with tens of derivative directions each), so copying them was most of the
+    /// rollback's cost. The `f64` buffer's holes are the solution's (read after the
+    /// solve) and are copied.
+    fn warm_copy_from(&mut self, src: &Self) {
+        if std::mem::size_of::<T>() == std::mem::size_of::<f64>()
+            || self.holes.len() != src.holes.len()
+        {
+            crate::math::warm::WarmCopy::warm_copy_from(&mut self.holes, &src.holes);
+        }
+        crate::math::warm::warm_fields!(self, src, copy: [
+            x, theta, res, lengths, lengths_ck, arc_t, arc_act, arc_corr, arc_corr_g,
+            rhs_evals, retries, local_tol, next, mlin, mlin_terms, mlin_valid, seg_map,
+            seg_map_valid, jump_b, settle_u, settle_v, settle_n, settle_tmp, prev_err,
+            prev_step, anchor, dnext, dnext_valid, z_anchor, dz, sweep_c0, sweep_w, lin,
+            watch, conjugate_at,
+        ], keep: [holes]);
+    }
+}

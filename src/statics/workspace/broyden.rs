@@ -107,6 +107,12 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
+impl crate::math::warm::WarmCopy for Broyden {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [n, h, built_from, hy, sh], keep: []);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

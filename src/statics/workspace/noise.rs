@@ -88,6 +88,12 @@ impl SettleNoise {
     }
 }
 
+impl crate::math::warm::WarmCopy for SettleNoise {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [active, x, lam], keep: []);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -298,6 +298,19 @@ fn ratio(p0: &Point, p1: &Point, loads: &Loads, theta: &[f64]) -> Option<f64> {
     (alpha.abs() <= MAX_RATIO && off <= PARALLEL_TOL * PARALLEL_TOL * d22).then_some(alpha)
 }
 
+impl crate::math::warm::WarmCopy for Point {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [x_ret, x, aux, theta, valid], keep: [loads]);
+        copy_loads(&mut self.loads, &src.loads);
+    }
+}
+
+impl crate::math::warm::WarmCopy for Secant {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [pts, from_sol], keep: []);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -178,3 +178,9 @@ fn wide_sweeps<const N: usize>(
     }
     ok
 }
+
+impl crate::math::warm::WarmCopy for Wide {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [narrow, broad], keep: []);
+    }
+}

@@ -622,6 +622,17 @@ impl TendonWorkspace {
     }
 }
 
+impl crate::math::warm::WarmCopy for JointBufs {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [
+            x0, t0, xs, ts, x, x_ok, t_ok, jac_s, jac_m, dz, max_step, lu, lu_taut, lu_valid,
+            first_chord_ok, rows_fresh, h, f_now, f_prev, step, hy, jinv, sth, yv, free_prev,
+            free_row, l2, inner_tol, hist_z, hist_f, hist_len, zp, at_solution, predicted,
+            pred_ratio, gap0, arm0, sw_taut, sw_dz, sw_f, rj, kept, cold,
+        ], keep: []);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

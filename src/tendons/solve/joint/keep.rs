@@ -68,6 +68,12 @@ impl TendonWorkspace {
     }
 }
 
+impl crate::math::warm::WarmCopy for Kept {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src, copy: [lengths, g, taut, f, l2], keep: []);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::Scene;

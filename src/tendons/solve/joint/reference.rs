@@ -96,3 +96,10 @@ impl TendonWorkspace {
         self.joint.rj.at_ref = None;
     }
 }
+
+impl crate::math::warm::WarmCopy for RefJacobian {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src,
+            copy: [jac_s, jac_m, res, lengths, theta, valid, pending, at_ref], keep: []);
+    }
+}

@@ -1,0 +1,50 @@
+//! The tendon solve's rollback (`TendonWorkspace::set_rollback`, on by default)
+//! allocates nothing: a counting `#[global_allocator]` (`tests/alloc_counter`).
+//! One test only in this file (the allocator's counts are process-wide).
+
+mod alloc_counter;
+use alloc_counter::counted;
+use cablesense::Scene;
+
+/// The rollback (`TendonWorkspace::set_rollback`, on by default) adds no allocation:
+/// on the FTDCR v4 val rows, after 20 warm-up rows, 60 warm rows with an
+/// unreachable row after every 10th allocate nothing, the rows that restore the
+/// kept state included. (The unreachable rows themselves are counted apart: the
+/// nested fallback they end in is not yet allocation-free.)
+#[test]
+fn tendon_rollback_does_not_allocate() {
+    let scene = Scene::load("data/scenes/ftdcr_v4.toml").unwrap();
+    let mut ws = scene.tendon_workspace().unwrap();
+    assert!(ws.rollback());
+    let mut p = scene.readings_parser(&ws);
+    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| p.line(i + 1, l).unwrap())
+        .map(|r| r.readings_m)
+        .collect();
+    let bad = [0.05, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    for q in &rows[..20] {
+        ws.solve_readings(q).unwrap();
+    }
+    let (mut good_allocs, mut bad_allocs, mut restored) = (0, 0, 0);
+    for (k, q) in rows[20..80].iter().enumerate() {
+        let pending = ws.rollback_pending();
+        let (n, _) = counted(|| {
+            assert!(ws.solve_readings(q).unwrap().status.is_converged());
+        });
+        good_allocs += n;
+        restored += usize::from(pending);
+        if k % 10 == 9 {
+            let (n, _) = counted(|| {
+                assert!(!ws.solve_readings(&bad).unwrap().status.is_converged());
+            });
+            bad_allocs += n;
+            assert!(ws.rollback_pending());
+        }
+    }
+    assert_eq!(restored, 5, "rows after an unreachable one");
+    eprintln!("unreachable rows: {bad_allocs} allocations in 6");
+    assert_eq!(good_allocs, 0, "{good_allocs} allocations in 60 rows");
+}
