@@ -366,10 +366,9 @@ fn even_guide_spacing_reaches_the_sections_end() {
     let g = scene.robot.sections[0].guides.as_ref().unwrap();
     assert!((g.first_offset_m + 14.0 * g.spacing_m - 0.1).abs() < 1e-15);
     // written back as "even"; a patched length spaces the disks again
-    let v = serde_json::to_value(
-        &Scene::from_toml_str(&fifteen_disks("\"even\"", "\"even\"")).unwrap(),
-    )
-    .unwrap();
+    let v =
+        serde_json::to_value(Scene::from_toml_str(&fifteen_disks("\"even\"", "\"even\"")).unwrap())
+            .unwrap();
     assert_eq!(
         v["robot"]["sections"][0]["guides"]["spacing_m"],
         json!("even")
