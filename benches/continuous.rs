@@ -105,6 +105,7 @@ fn till_with_disks(n: usize) -> Robot {
                     radius_m: 0.01506,
                     angles_deg: vec![0.0, 90.0, 180.0, 270.0],
                 },
+                even: Default::default(),
             }),
         }],
         cables: (0..4).map(|k| CableSpec::through_hole(k, 0)).collect(),

@@ -78,6 +78,7 @@ fn guides(count: usize, first: f64, spacing: f64) -> GuideSpec {
             radius_m: 0.01,
             angles_deg: vec![90.0, 210.0, 330.0],
         },
+        even: Default::default(),
     }
 }
 

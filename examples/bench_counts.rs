@@ -179,6 +179,7 @@ fn guides(count: usize, first: f64, spacing: f64) -> GuideSpec {
             radius_m: 0.01,
             angles_deg: vec![90.0, 210.0, 330.0],
         },
+        even: Default::default(),
     }
 }
 
@@ -474,6 +475,7 @@ fn till_with_disks(n: usize) -> Robot {
                     radius_m: 0.01506,
                     angles_deg: vec![0.0, 90.0, 180.0, 270.0],
                 },
+                even: Default::default(),
             }),
         }],
         cables: (0..4).map(|k| CableSpec::through_hole(k, 0)).collect(),

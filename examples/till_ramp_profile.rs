@@ -42,6 +42,7 @@ fn main() {
                         radius_m: 0.01506,
                         angles_deg: vec![0.0, 90.0, 180.0, 270.0],
                     },
+                    even: Default::default(),
                 }),
             }],
             cables: (0..4).map(|k| CableSpec::through_hole(k, 0)).collect(),

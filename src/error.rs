@@ -63,10 +63,14 @@ pub enum ModelError {
     },
     /// A guide disk (centre +- half thickness) does not fit inside its section.
     #[error(
-        "guide {guide} of section {section} spans s = [{}, {}] m, outside the section [0, {}] m",
-        Fixed6(*.start),
-        Fixed6(*.end),
-        Fixed6(*.length)
+        "guide {guide} of section {section} spans s = [{}, {}] m, outside the section [0, {}] m \
+         by {} m (more than the {} m tolerance; `spacing_m = \"even\"` spaces the disks to \
+         the section's end without a rounded spacing)",
+        Num(*.start),
+        Num(*.end),
+        Num(*.length),
+        Num((-*.start).max(*.end - *.length)),
+        Num(crate::robot::GUIDE_FIT_TOLERANCE_M)
     )]
     GuideOutsideSection {
         section: usize,

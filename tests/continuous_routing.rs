@@ -73,6 +73,7 @@ fn till_disks(n: usize) -> Robot {
             radius_m: 0.01506,
             angles_deg: vec![0.0, 90.0, 180.0, 270.0],
         },
+        even: Default::default(),
     };
     let cables = (0..4).map(|k| CableSpec::through_hole(k, 0)).collect();
     Robot::new(till_spec(Some(guides), cables)).unwrap()

@@ -35,6 +35,7 @@ mod calibrate_tendons;
 mod cli_anywhere;
 mod cli_broken_pipe;
 mod continuous_routing;
+mod daru_order;
 mod estimate_bounds;
 mod estimate_noise;
 mod estimate_roundtrip;

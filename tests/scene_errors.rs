@@ -317,3 +317,74 @@ fn scenes_round_trip_through_toml_and_json() {
         assert_eq!(Scene::from_json_str(&json).unwrap(), scene, "JSON:\n{json}");
     }
 }
+
+/// BASE with 15 thin disks on a 0.1 m section, first offset and spacing as given.
+fn fifteen_disks(first: &str, spacing: &str) -> String {
+    BASE.replace("length_m = 0.2", "length_m = 0.1")
+        .replace("count = 3", "count = 15")
+        .replace(
+            "first_offset_m = 0.05",
+            &format!("first_offset_m = {first}"),
+        )
+        .replace("spacing_m = 0.05", &format!("spacing_m = {spacing}"))
+        .replace("thickness_m = 3e-3", "thickness_m = 0.0")
+}
+
+/// Disks evenly spaced to the section's end, written with a rounded spacing: an
+/// overshoot within 1e-9 m is accepted (the disk sits on the end), a larger one is
+/// refused with enough digits to see it (the issue's `spans s = [0.100000,
+/// 0.100000] m` hid 5e-10 m).
+#[test]
+fn rounded_guide_spacing_within_a_nanometre_is_accepted_and_larger_is_shown() {
+    // 15 x 0.0066666667 = 0.1000000005: 5e-10 m past the end
+    let text = fifteen_disks("0.0066666667", "0.0066666667");
+    let scene = Scene::from_toml_str(&text).unwrap();
+    scene.validate().unwrap();
+    let robot = scene.build_robot().unwrap();
+    let last = robot.guides().last().unwrap().s;
+    assert!(last <= 0.1 && last > 0.1 - 1e-9, "last disk at {last}");
+    // 15 x 0.006666667 = 0.100000005: 5e-9 m past the end
+    let msg = toml_error(&fifteen_disks("0.006666667", "0.006666667"));
+    assert_mentions(&msg, &["guide 14", "0.10000000", "tolerance", "\"even\""]);
+    assert!(!msg.contains("[0.100000, 0.100000]"), "{msg}");
+}
+
+/// `"even"` spaces the disks to the section's end without a rounded decimal, is
+/// written back as `"even"`, and spaces them again when the length changes (e.g.
+/// a calibrated length).
+#[test]
+fn even_guide_spacing_reaches_the_sections_end() {
+    let scene = Scene::from_toml_str(&fifteen_disks("\"even\"", "\"even\"")).unwrap();
+    scene.validate().unwrap();
+    let robot = scene.build_robot().unwrap();
+    let s: Vec<f64> = robot.guides().iter().map(|g| g.s).collect();
+    assert_eq!(s.len(), 15);
+    assert!((s[0] - 0.1 / 15.0).abs() < 1e-15, "{s:?}");
+    assert!((s[14] - 0.1).abs() < 1e-15, "{s:?}");
+    // a numeric first offset with an even spacing: the last disk on the end
+    let scene = Scene::from_toml_str(&fifteen_disks("0.02", "\"even\"")).unwrap();
+    let g = scene.robot.sections[0].guides.as_ref().unwrap();
+    assert!((g.first_offset_m + 14.0 * g.spacing_m - 0.1).abs() < 1e-15);
+    // written back as "even"; a patched length spaces the disks again
+    let v =
+        serde_json::to_value(Scene::from_toml_str(&fifteen_disks("\"even\"", "\"even\"")).unwrap())
+            .unwrap();
+    assert_eq!(
+        v["robot"]["sections"][0]["guides"]["spacing_m"],
+        json!("even")
+    );
+    let path: cablesense::validation::ParamPath = "robot/sections/0/length_m".parse().unwrap();
+    let longer = cablesense::validation::set_values(&scene_of(&v), &[path], &[0.12]).unwrap();
+    let robot = longer.build_robot().unwrap();
+    assert!((robot.guides().last().unwrap().s - 0.12).abs() < 1e-15);
+    // any other word is refused
+    let msg = match Scene::from_toml_str(&fifteen_disks("\"even\"", "\"equal\"")) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("`equal` accepted"),
+    };
+    assert_mentions(&msg, &["spacing_m"]);
+}
+
+fn scene_of(v: &Value) -> Scene {
+    Scene::from_json_str(&serde_json::to_string(v).unwrap()).unwrap()
+}

@@ -413,6 +413,7 @@ impl ForwardInput {
                         radius_m: self.guide.1,
                         angles_deg: vec![90.0, 210.0, 330.0],
                     },
+                    even: Default::default(),
                 }),
             })
             .collect::<Vec<_>>();

@@ -114,6 +114,7 @@ fn recording(head: &[u8; HEADER_BYTES], text: &str) {
             .iter()
             .map(|&b| name(b))
             .collect(),
+        header: Vec::new(),
     };
     let total_lines = text.split('\n').count();
     let rec = match Recording::parse_str(FILE, text, &map) {

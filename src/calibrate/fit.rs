@@ -145,6 +145,27 @@ pub struct CalibrationSettings {
     /// With more failed rows than this fraction (of the train rows, rounded down)
     /// no step is taken and the status is [`LmStatus::TooManyFailedRows`].
     pub max_failed_fraction: f64,
+    /// Order in which the rows are solved, each warm-started from the one before
+    /// (default [`RowOrder::Auto`]: the result does not depend on the order of
+    /// the file's rows).
+    pub row_order: RowOrder,
+}
+
+/// The order of a calibration's row chain (see [`super::row_order`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RowOrder {
+    /// Time order when every row has a time stamp (a time series: play and
+    /// friction carry history from one row to the next), else
+    /// [`RowOrder::Nearest`]. Either way the same chain whatever the order of the
+    /// rows in the file.
+    #[default]
+    Auto,
+    /// A nearest-neighbour chain in readings space from the row nearest to zero
+    /// readings, ties broken by the rows' values ([`super::chain_order`]).
+    Nearest,
+    /// File order (a raster's line ends are long jumps for a warm start).
+    File,
 }
 
 impl Default for CalibrationSettings {
@@ -160,6 +181,7 @@ impl Default for CalibrationSettings {
             unit_check_sigma: 20.0,
             fd_check_limit: 1e-3,
             max_failed_fraction: 0.05,
+            row_order: RowOrder::Auto,
         }
     }
 }

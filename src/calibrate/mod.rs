@@ -20,6 +20,7 @@
 //!
 //! Units: SI (m, N, kg, rad); a recording's mm columns are converted on reading.
 
+mod cc_model;
 pub mod conditioning;
 mod crossval;
 mod fit;
@@ -39,11 +40,12 @@ mod stats;
 pub use crate::scene::calibration::{
     CalibrationSpec, LengthUnit, ParamSpec, TransformSpec, MIN_HUBER_SIGMA,
 };
+pub use cc_model::CcModel;
 pub use conditioning::{Conditioning, InputTimeline, ReadingsHistory, MAX_GAP_S};
 pub use crossval::{cross_validate, parse_families, row_labels, CrossValidation, Folds, HeldOut};
 pub use fit::{
     CalibrationReport, CalibrationSettings, FailedRow, FitParam, FittedParam, FrameSetup, Progress,
-    RowResult, RowWork, RowsProgress, Split, Stage,
+    RowOrder, RowResult, RowWork, RowsProgress, Split, Stage,
 };
 pub use frame::{kabsch, rotation_vector, umeyama, RigidTransform};
 pub use identify::{
@@ -65,7 +67,7 @@ pub use recording::{
     is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow, RowHistory,
 };
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
-pub use run::{calibrate, frame_param_names, CalibrationSetup};
+pub use run::{calibrate, chain_order, frame_param_names, row_order, CalibrationSetup};
 pub use stats::{
     parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,
     CORRELATION_LIMIT, NULL_DIRECTION_LIMIT,

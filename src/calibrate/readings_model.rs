@@ -54,7 +54,7 @@ pub struct ReadingsModel {
 
 /// The readings (m) of `row` conditioned by `cond` into `q`; `cache` keeps the
 /// conditioned readings of the whole timeline of the last row's recording.
-fn conditioned_into(
+pub(super) fn conditioned_into(
     cond: &Conditioning,
     cache: &mut Option<(Arc<InputTimeline>, Vec<f64>)>,
     columns: &[usize],

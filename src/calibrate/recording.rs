@@ -1,5 +1,6 @@
 //! Recordings: rows of model inputs (tensions, forces, ...) and the measured marker
-//! position, read from CSV (header line; a UTF-8 BOM and CRLF line ends are
+//! position, read from CSV (header line, or column names given by
+//! [`ColumnMap::header`] for a file without one; a UTF-8 BOM and CRLF line ends are
 //! tolerated; `#` lines and blank lines are skipped) or JSON lines (one object per
 //! line, keys = column names). Every error names the file, the line (1-based) and
 //! the column.
@@ -24,6 +25,9 @@ pub struct ColumnMap {
     pub time_column: Option<String>,
     /// Input columns; empty = every column named `tension_*`, `force_*` or `mass_*`.
     pub inputs: Vec<String>,
+    /// Column names of a CSV file without a header line (its first line is data);
+    /// empty = the first line is the header. Not used for JSON lines.
+    pub header: Vec<String>,
 }
 
 impl Default for ColumnMap {
@@ -40,6 +44,7 @@ impl ColumnMap {
             unit: spec.unit,
             time_column: spec.time_column.clone(),
             inputs: spec.inputs.clone(),
+            header: spec.header.clone(),
         }
     }
 }
@@ -298,6 +303,11 @@ impl Recording {
                 rows.push(lay.row(file, line, map.unit, &get)?);
             } else {
                 let cells = split_csv(l);
+                if layout.is_none() && !map.header.is_empty() {
+                    // headerless: the names come from the map, this line is data
+                    header = map.header.clone();
+                    layout = Some(Layout::new(file, line, &header, map)?);
+                }
                 let Some(lay) = &layout else {
                     header = cells;
                     layout = Some(Layout::new(file, line, &header, map)?);

@@ -55,6 +55,10 @@ pub const FILES: &[DemoFile] = &[
         "the real three-segment, nine-tendon FTDCR v4 (displacement-driven tendons; `solve --readings`, `track`)"
     ),
     demo!(
+        "scenes/daru.toml",
+        "a one-segment, three-cable robot (data/hardware/daru, MIT): the starting scene of its calibration"
+    ),
+    demo!(
         "scenes/tdcr_modeling.toml",
         "the two-segment robot of the C++ project tdcr-modeling (exact against condensed coupling)"
     ),

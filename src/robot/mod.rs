@@ -15,7 +15,8 @@ mod tendon;
 pub use friction::capstan_factors;
 pub use routing::{PathPoint, PathSpec, RoutingField, TendonPath};
 pub use spec::{
-    BaseSpec, CableFile, CableSpec, GuideSpec, HolesSpec, RobotSpec, SectionFile, SectionSpec,
+    BaseSpec, CableFile, CableSpec, EvenLayout, EvenWord, GuideFile, GuideSpec, HolesSpec,
+    RobotSpec, SectionFile, SectionSpec, SpacingValue, GUIDE_FIT_TOLERANCE_M,
     MAX_GUIDES_PER_SECTION,
 };
 pub use tendon::{Actuation, FrictionSpec, RoutingSpec, TendonMechanics, TendonSpec};
@@ -128,7 +129,12 @@ impl Robot {
                     guides.push(Guide {
                         section: k,
                         index: i,
-                        s: start + g.first_offset_m + i as f64 * g.spacing_m,
+                        // a disk within GUIDE_FIT_TOLERANCE_M past the section's end
+                        // (a rounded spacing) sits at the end
+                        s: start
+                            + (g.first_offset_m + i as f64 * g.spacing_m)
+                                .max(0.0)
+                                .min(sec.length_m),
                         thickness: g.thickness_m,
                         mass: g.mass_kg,
                         holes: holes.clone(),

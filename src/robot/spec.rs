@@ -93,9 +93,113 @@ pub struct SectionFile {
     /// Precurvature (1/m, default zero).
     #[serde(default)]
     pub precurvature_per_m: [f64; 3],
-    /// Guide disks (default none).
+    /// Guide disks (default none); `spacing_m` and `first_offset_m` may be `"even"`
+    /// (see [`GuideFile`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub guides: Option<GuideSpec>,
+    pub guides: Option<GuideFile>,
+}
+
+/// The word `"even"` in a guide table (the only word accepted there).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EvenWord {
+    /// Evenly spaced to the section's end.
+    Even,
+}
+
+/// A guide spacing or first offset in a file: metres, or `"even"`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum SpacingValue {
+    /// A length (m).
+    Metres(f64),
+    /// `"even"`: computed from the section length (see [`GuideFile`]).
+    Even(EvenWord),
+}
+
+/// The file form of [`GuideSpec`]: `spacing_m` and `first_offset_m` are numbers (m)
+/// or the word `"even"`, so that disks evenly spaced to the section's end need no
+/// rounded decimal (15 disks on 0.1 m: 0.0066666667 overshoots by 5e-10 m).
+///
+/// With thickness `t`, section length `L` and `n = count` disks, the last disk's
+/// face is put on the section's end (its centre at `L - t/2`):
+/// * `spacing_m = "even"`, `first_offset_m = a` (m): `spacing = (L - t/2 - a) / (n - 1)`
+///   (`n = 1`: spacing unused, 0);
+/// * both `"even"`: the first disk one spacing from the base,
+///   `first_offset = spacing = (L - t/2) / n`;
+/// * `first_offset_m = "even"` with a numeric spacing `d`: `first_offset = L - t/2 - (n - 1) d`.
+///
+/// Written back (e.g. by `calibrate`) as given: `"even"` stays `"even"` (and is
+/// resolved again for the section's length when read).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GuideFile {
+    /// Number of disks.
+    pub count: usize,
+    /// First disk's centre from the section start (m) or `"even"`.
+    pub first_offset_m: SpacingValue,
+    /// Centre-to-centre spacing (m) or `"even"`.
+    pub spacing_m: SpacingValue,
+    /// Disk thickness (m).
+    pub thickness_m: f64,
+    /// Disk outer diameter (m).
+    pub diameter_m: f64,
+    /// Mass of one disk (kg).
+    pub mass_kg: f64,
+    /// Cable holes.
+    pub holes: HolesSpec,
+}
+
+impl GuideFile {
+    /// The guide layout on a section of `length_m` (m): the `"even"` values resolved
+    /// as documented on [`GuideFile`]. Out-of-range results (e.g. a negative offset)
+    /// are left for [`GuideSpec::validate`] to report.
+    pub fn resolve(&self, length_m: f64) -> GuideSpec {
+        let end = length_m - self.thickness_m / 2.0;
+        let n = self.count.max(1) as f64;
+        let (first, spacing) = match (self.first_offset_m, self.spacing_m) {
+            (SpacingValue::Metres(a), SpacingValue::Metres(d)) => (a, d),
+            (SpacingValue::Metres(a), SpacingValue::Even(_)) => {
+                (a, if n > 1.0 { (end - a) / (n - 1.0) } else { 0.0 })
+            }
+            (SpacingValue::Even(_), SpacingValue::Even(_)) => (end / n, end / n),
+            (SpacingValue::Even(_), SpacingValue::Metres(d)) => (end - (n - 1.0) * d, d),
+        };
+        GuideSpec {
+            count: self.count,
+            first_offset_m: first,
+            spacing_m: spacing,
+            thickness_m: self.thickness_m,
+            diameter_m: self.diameter_m,
+            mass_kg: self.mass_kg,
+            holes: self.holes.clone(),
+            even: EvenLayout {
+                first_offset: matches!(self.first_offset_m, SpacingValue::Even(_)),
+                spacing: matches!(self.spacing_m, SpacingValue::Even(_)),
+            },
+        }
+    }
+}
+
+impl From<GuideSpec> for GuideFile {
+    fn from(g: GuideSpec) -> Self {
+        let value = |even: bool, m: f64| {
+            if even {
+                SpacingValue::Even(EvenWord::Even)
+            } else {
+                SpacingValue::Metres(m)
+            }
+        };
+        Self {
+            count: g.count,
+            first_offset_m: value(g.even.first_offset, g.first_offset_m),
+            spacing_m: value(g.even.spacing, g.spacing_m),
+            thickness_m: g.thickness_m,
+            diameter_m: g.diameter_m,
+            mass_kg: g.mass_kg,
+            holes: g.holes,
+        }
+    }
 }
 
 impl From<SectionFile> for SectionSpec {
@@ -110,7 +214,7 @@ impl From<SectionFile> for SectionSpec {
             },
             shear_coefficient: f.shear_coefficient,
             precurvature_per_m: f.precurvature_per_m,
-            guides: f.guides,
+            guides: f.guides.map(|g| g.resolve(f.length_m)),
         }
     }
 }
@@ -125,7 +229,7 @@ impl From<SectionSpec> for SectionFile {
             density_kg_m3: s.material.density_kg_m3,
             shear_coefficient: s.shear_coefficient,
             precurvature_per_m: s.precurvature_per_m,
-            guides: s.guides,
+            guides: s.guides.map(GuideFile::from),
         }
     }
 }
@@ -133,6 +237,11 @@ impl From<SectionSpec> for SectionFile {
 /// Upper bound on disks per section: the layout is allocated per disk, so an absurd
 /// count in a scene file must fail validation rather than exhaust memory.
 pub const MAX_GUIDES_PER_SECTION: usize = 10_000;
+
+/// How far (m) a guide disk may reach past its section's ends and still be accepted
+/// (it is then placed at the end): 1e-9 m, far below any machining tolerance, and
+/// above the rounding of a spacing written to ten decimals times a few dozen disks.
+pub const GUIDE_FIT_TOLERANCE_M: f64 = 1e-9;
 
 fn one() -> f64 {
     1.0
@@ -156,6 +265,21 @@ pub struct GuideSpec {
     pub mass_kg: f64,
     /// Cable holes.
     pub holes: HolesSpec,
+    /// Which of `first_offset_m` and `spacing_m` the file gave as `"even"` (they
+    /// are written back as `"even"`, so a scene whose section length is changed,
+    /// e.g. by a calibration, spaces its disks again). Default: neither.
+    #[serde(default)]
+    pub even: EvenLayout,
+}
+
+/// Which guide-layout values were given as `"even"` ([`GuideFile`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EvenLayout {
+    /// `first_offset_m = "even"`.
+    pub first_offset: bool,
+    /// `spacing_m = "even"`.
+    pub spacing: bool,
 }
 
 /// Cable holes on a disk: one radius, several angles.
@@ -461,7 +585,7 @@ impl GuideSpec {
         let half = self.thickness_m / 2.0;
         for i in 0..self.count {
             let c = self.first_offset_m + i as f64 * self.spacing_m;
-            if c - half < -1e-12 || c + half > length + 1e-12 {
+            if c - half < -GUIDE_FIT_TOLERANCE_M || c + half > length + GUIDE_FIT_TOLERANCE_M {
                 return Err(ModelError::GuideOutsideSection {
                     section,
                     guide: i,

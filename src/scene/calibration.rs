@@ -153,6 +153,10 @@ pub struct CalibrationSpec {
     pub time_column: Option<String>,
     /// Input columns; empty (default) = every column named `tension_*`, `force_*` or `mass_*`.
     pub inputs: Vec<String>,
+    /// Names of the columns of a CSV recording without a header line, in file order
+    /// (then the first line is data); empty (default) = the first line is the header.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub header: Vec<String>,
     /// Arc length (m) of the body frame the marker is fixed to; `None` (default) = the tip.
     pub marker_s_m: Option<f64>,
     /// Marker position in that body's local frame (m); default zero. Fitted when
@@ -187,6 +191,7 @@ impl Default for CalibrationSpec {
             unit: LengthUnit::M,
             time_column: None,
             inputs: Vec::new(),
+            header: Vec::new(),
             marker_s_m: None,
             marker_offset_m: [0.0; 3],
             capture_noise_m: 5e-4,

@@ -21,6 +21,7 @@ mod fitted;
 mod hardware;
 mod inverse;
 mod inverse_loo;
+mod rung_compare;
 mod tables;
 mod track_chain;
 
@@ -37,6 +38,11 @@ pub use hardware::{
 };
 pub use inverse::{table_4_5_inverse, table_4_5_inverse_from, InverseRow, READING_SIGMA_M};
 pub use inverse_loo::{table_4_5_loo, LooRow, TableRowModel, LOO_PARAMS, TIP_SIGMA_M, Z95};
+pub use rung_compare::{
+    compare_with_cc, daru_cc_spec, ftdcr_cc_spec, shipped_daru_comparison,
+    shipped_ftdcr_comparison, stored_values, CcRungSpec, RangeCheck, RungComparison, DARU_DATA,
+    DARU_SCENE, DARU_TRAIN_ROWS,
+};
 pub use tables::{LengthSpec, PointSpec, RowLoad, TableData, TableSpec, ThesisTable};
 pub use track_chain::{track_errors, ChainStep, TrackChain, TrackErrors};
 

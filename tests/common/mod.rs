@@ -105,6 +105,7 @@ pub fn guides(count: usize, first: f64, spacing: f64) -> GuideSpec {
             radius_m: 0.01,
             angles_deg: vec![90.0, 210.0, 330.0],
         },
+        even: Default::default(),
     }
 }
 

@@ -42,6 +42,13 @@ pub fn row_json(
         .iter()
         .map(|&j| robot.cables()[j].name.as_str())
         .collect();
+    // a row that did not converge has no tip: its last iterate is given apart,
+    // named as such, never as a result
+    let (tip_json, last_iterate) = if rep.status.is_converged() {
+        (json!([tip.x, tip.y, tip.z]), Value::Null)
+    } else {
+        (Value::Null, json!([tip.x, tip.y, tip.z]))
+    };
     json!({
         "line": row.line,
         "t_s": row.t_s,
@@ -49,7 +56,8 @@ pub fn row_json(
         "iterations": rep.iterations,
         "forward_solves": rep.forward_solves,
         "residual_m": rep.residual_m,
-        "tip_position_m": [tip.x, tip.y, tip.z],
+        "tip_position_m": tip_json,
+        "last_iterate_tip_m": last_iterate,
         "measured_tip_m": row.measured_tip_m,
         "tendons": names,
         "readings_m": row.readings_m,
@@ -77,10 +85,18 @@ fn row_text(ws: &TendonWorkspace, row: &ReadingRow, rep: &TendonReport) -> Strin
             }
         })
         .collect();
+    let status = format!("{:?}", rep.status).to_lowercase();
+    if !rep.status.is_converged() {
+        // no result: the last iterate is not a tip (a stalled chain would repeat it)
+        return format!(
+            "line {:5}  {:<14} STALLED: no tip (last iterate [{:8.2} {:8.2} {:8.2}] mm, not a result)  measured {measured}",
+            row.line, status, tip.x, tip.y, tip.z
+        );
+    }
     format!(
         "line {:5}  {:<14} tip [{:8.2} {:8.2} {:8.2}] mm  measured {measured}  T [{}] N",
         row.line,
-        format!("{:?}", rep.status).to_lowercase(),
+        status,
         tip.x,
         tip.y,
         tip.z,

@@ -214,6 +214,7 @@ mod tests {
                     radius_m: 0.01,
                     angles_deg: vec![90.0, 210.0, 330.0],
                 },
+                even: Default::default(),
             }),
         };
         Robot::new(RobotSpec {
