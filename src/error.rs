@@ -70,7 +70,7 @@ pub enum ModelError {
         Num(*.end),
         Num(*.length),
         Num((-*.start).max(*.end - *.length)),
-        Num(crate::robot::GUIDE_FIT_TOLERANCE_M)
+        Num(*.tolerance)
     )]
     GuideOutsideSection {
         section: usize,
@@ -78,6 +78,8 @@ pub enum ModelError {
         start: f64,
         end: f64,
         length: f64,
+        /// The overshoot accepted (m), `crate::robot::GUIDE_FIT_TOLERANCE_M`.
+        tolerance: f64,
     },
     /// Two guide disks of one section overlap.
     #[error("guides {guide} and {next} of section {section} overlap (spacing {} m < thickness {} m)", Num(*.spacing), Num(*.thickness))]

@@ -21,8 +21,8 @@ use super::recording::RecordingRow;
 use super::CalibrationError;
 use crate::files::Scene;
 use crate::ladder::{CcSettings, ConstantCurvature, ForwardModel};
+use crate::scene::param::ParamPath;
 use crate::statics::Pose;
-use crate::validation::ParamPath;
 use std::sync::Arc;
 
 /// Readings -> constant-curvature arcs -> tip pose.
@@ -55,7 +55,7 @@ fn cc_scene(
     params: &[ParamPath],
     values: &[f64],
 ) -> Result<Scene, CalibrationError> {
-    let mut patched = crate::validation::set_values(scene, params, values)?;
+    let mut patched = crate::scene::param::set_values(scene, params, values)?;
     for (new, old) in patched.robot.sections.iter_mut().zip(&scene.robot.sections) {
         if let Some(g) = new.guides.as_mut() {
             // "even" layouts were spaced again for the new length when patched

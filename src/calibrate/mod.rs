@@ -1,5 +1,5 @@
 //! Calibration of a robot model from a recording: scene parameters (by path,
-//! [`crate::validation::ParamPath`]) together with the capture-frame transform and
+//! [`crate::scene::param::ParamPath`]) together with the capture-frame transform and
 //! the marker offset, fitted to measured marker positions.
 //!
 //! Workflow:

@@ -592,6 +592,7 @@ impl GuideSpec {
                     start: c - half,
                     end: c + half,
                     length,
+                    tolerance: GUIDE_FIT_TOLERANCE_M,
                 });
             }
         }
