@@ -58,6 +58,7 @@ mod rollback;
 mod scene_errors;
 mod settings_matrix;
 mod soak_faults;
+mod soft_arm;
 mod stability;
 mod svg_shape;
 mod tendon_cold;

@@ -5,8 +5,10 @@
 //! eq. 2.12):
 //! - a force `F` at arc length `s`: `|F| s^2 / EI` (the map's `P L^2 / EI` at the tip);
 //! - a torque `M` at `s`: `|M| s / EI`;
-//! - a weight (payload, guide, rod element) at `s`: `m |g| s^2 / EI`, so the bare rod
-//!   contributes `rho A |g| L^3 / (3 EI)`;
+//! - a weight (payload, guide, rod element) at `s`: `m g_b s^2 / EI`, so the bare rod
+//!   contributes `rho A g_b L^3 / (3 EI)`, with `g_b` the part of gravity that can bend
+//!   the straight rod: across its base axis, plus along it where it compresses the rod
+//!   (weight along the axis of a hanging rod pulls it straight; `bending_gravity`);
 //! - the cables ending on one section's last disk at `s_end`, with tensions `T_j` and
 //!   holes `d_j` there: `|sum_j T_j (e3 x d_j)| s_end / EI`, the bending angle of the
 //!   equivalent constant-curvature arc under their net moment (one cable: the map's
@@ -71,6 +73,21 @@ pub(crate) fn intensity_of(sum: f64, ei: f64) -> f64 {
     }
 }
 
+/// The part of gravity (m/s^2) that can bend the rod from its straight reference: the
+/// component across the base axis `e`, plus the axial component where it compresses
+/// the rod (`g . e < 0`: an upright rod carries its weight and can buckle under it).
+/// Along `e` (a hanging arm) weight pulls the rod straight: it stiffens rather than
+/// bends it, and counting it would call a soft arm hanging under its own weight a
+/// large load (a 0.36 m arm of E = 3e5 Pa: 90 rad, which sent its cold solve into a
+/// branch-checked continuation that ran out of steps; its equilibrium is a few
+/// Newton steps from the straight rod).
+fn bending_gravity(robot: &Robot, loads: &Loads) -> f64 {
+    let g = Vector3::from(loads.gravity_m_s2);
+    let e = robot.base_rotation() * Vector3::z();
+    let axial = g.dot(&e);
+    (g - e * axial).norm() + (-axial).max(0.0)
+}
+
 /// Every term of [`load_intensity`] before the division by `EI_min`, handed to
 /// `visit` with its source (terms of zero included, in a fixed order); returns
 /// `EI_min` (N m^2). No allocation: [`load_intensity`] runs at every evaluation of a
@@ -83,7 +100,7 @@ pub(crate) fn intensity_terms(
     visit: &mut impl FnMut(IntensitySource, f64),
 ) -> f64 {
     let ei = robot.min_bending_stiffness();
-    let g = Vector3::from(loads.gravity_m_s2).norm();
+    let g = bending_gravity(robot, loads);
     let end = |section: usize| robot.sections().get(section).map_or(0.0, |s| s.end());
     // weight of the bare rod, section by section: int rho A g s^2 ds
     for (k, s) in robot.sections().iter().enumerate() {
