@@ -1353,8 +1353,8 @@ fn json_row_with_a_repeated_key_is_refused_naming_the_key() {
 /// Found by audit 24: an empty rows file (`solve --readings`, `track --input`,
 /// `estimate --measure`) exited 0 with nothing solved. A named file with no row
 /// (empty, or a header alone) is fatal like a bad stream header: exit 1, the file
-/// named. Standard input that closes before its first row is not an error (a
-/// control loop whose producer stopped), and `calibrate --data` stops (exit 2).
+/// named; standard input with no row likewise (issue 43: `track` exited 0 there),
+/// and `calibrate --data` stops (exit 2).
 #[test]
 fn rows_file_without_rows_is_an_error_naming_it() {
     let dir = TempDir::new("norows");
@@ -1403,11 +1403,15 @@ fn rows_file_without_rows_is_an_error_naming_it() {
             assert!(r.stderr.contains(p), "{args:?}: `{p}` not in {}", r.stderr);
         }
     }
-    // standard input: a header and no row, or nothing, is a stream that ended
-    for stdin in ["", RD_HEADER] {
+    // standard input: nothing, or a header and no row, is an error too (exit 1),
+    // naming standard input and why
+    for (stdin, why) in [("", "the file is empty"), (RD_HEADER, "a header")] {
         let r = run_with(&["track", &repo(TDCR)], Some(stdin));
-        assert_eq!(r.code, 0, "{stdin:?}: {}", r.stderr);
-        assert!(r.stdout.is_empty() && r.stderr.is_empty(), "{}", r.stderr);
+        assert_eq!(r.code, 1, "{stdin:?}: {}", r.stderr);
+        assert!(r.stdout.is_empty(), "{}", r.stdout);
+        for p in ["standard input", "no rows", why] {
+            assert!(r.stderr.contains(p), "{stdin:?}: `{p}` not in {}", r.stderr);
+        }
     }
     let r = calibrate("empty", "", &[]);
     assert_error(&r, &["rec.csv", "no header and no rows"]);

@@ -127,11 +127,10 @@ pub fn open_watched(arg: &Path) -> anyhow::Result<(Box<dyn std::io::BufRead>, Co
     Ok((Box::new(r), content))
 }
 
-/// The error for an input file that gave no row at all (`rows` counts good and
-/// bad rows): an empty file, or one with a header and nothing after it. A named
-/// file of rows with none is fatal like a bad stream header (exit code 1), since a
-/// run over nothing would look like a clean one; standard input with no row is not
-/// (a control loop whose producer stopped before its first row), see `track`.
+/// The error for an input that gave no row at all (`rows` counts good and bad
+/// rows): an empty file or stream, or one with a header and nothing after it. Fatal
+/// like a bad stream header (exit code 1), for a named file and for standard input
+/// alike, since a run over nothing would look like a clean one.
 pub fn no_rows(arg: &Path, rows: usize, content: &Content) -> Option<String> {
     (rows == 0).then(|| {
         if content.get() {

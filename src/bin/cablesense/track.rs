@@ -59,18 +59,19 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             );
         }
     }
-    // rows from --input FILE, or standard input; a file that gives no row is an
-    // error (exit code 1), standard input that closes before its first row is not
-    // (the producer of a control loop stopped)
+    // rows from --input FILE, or standard input; an input that gives no row (empty,
+    // or a header and nothing after it) is an error, exit code 1, as for `solve
+    // --readings` and `estimate`: a run over nothing must not look like a clean one
     let (reader, content): (Box<dyn BufRead>, _) = match &input {
         Some(f) => open_watched(f)?,
-        None => (
-            Box::new(std::io::BufReader::new(std::io::stdin())),
-            Default::default(),
-        ),
+        None => {
+            let (r, c) = crate::stream::Watched::new(std::io::BufReader::new(std::io::stdin()));
+            (Box::new(r), c)
+        }
     };
     let finish = |rows: usize| {
-        let why = input.as_ref().and_then(|f| no_rows(f, rows, &content));
+        let stdin = PathBuf::from("standard input");
+        let why = no_rows(input.as_ref().unwrap_or(&stdin), rows, &content);
         if let Some(why) = why {
             eprintln!("error: {why}");
             return ExitCode::from(1);
