@@ -89,17 +89,7 @@ impl CcModel {
                 "the CC rung needs displacement-driven tendons (their readings)".into(),
             ));
         }
-        let columns = reading_columns
-            .iter()
-            .map(|c| {
-                input_names.iter().position(|n| n == c).ok_or_else(|| {
-                    CalibrationError::BadInput(format!(
-                        "no input column `{c}` for a displacement-driven tendon (inputs: {})",
-                        input_names.join(", ")
-                    ))
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let columns = super::readings_model::reading_positions(&reading_columns, input_names)?;
         let values = params
             .iter()
             .map(|p| p.value(scene))

@@ -114,18 +114,7 @@ impl ReadingsModel {
                 )));
             }
         }
-        let columns = ws
-            .columns()
-            .iter()
-            .map(|c| {
-                input_names.iter().position(|n| n == c).ok_or_else(|| {
-                    CalibrationError::BadInput(format!(
-                        "no input column `{c}` for a displacement-driven tendon (inputs: {})",
-                        input_names.join(", ")
-                    ))
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let columns = reading_positions(ws.columns(), input_names)?;
         let values = params
             .iter()
             .map(|p| p.value(scene))
@@ -366,4 +355,24 @@ impl CalibrationModel for SceneModel {
             Self::Readings(m) => m.sensitivities_counting(values, steps, rows, out, done),
         }
     }
+}
+
+/// Where each displacement-driven tendon's reading column is among a recording's
+/// inputs; a missing one is an error naming it and the inputs there are.
+pub(super) fn reading_positions<S: AsRef<str>>(
+    columns: &[S],
+    input_names: &[String],
+) -> Result<Vec<usize>, CalibrationError> {
+    columns
+        .iter()
+        .map(|c| {
+            let c = c.as_ref();
+            input_names.iter().position(|n| n == c).ok_or_else(|| {
+                CalibrationError::BadInput(format!(
+                    "no input column `{c}` for a displacement-driven tendon (inputs: {})",
+                    input_names.join(", ")
+                ))
+            })
+        })
+        .collect()
 }

@@ -188,28 +188,38 @@ pub fn forward_settings(robot: &Robot) -> Vec<Rung> {
             ..PccSettings::default()
         }));
     }
-    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
-        for integrator in [
-            Integrator::Rk4 {
-                steps_per_section: 8,
-            },
-            Integrator::Rk4 {
-                steps_per_section: 32,
-            },
-            Integrator::Adaptive {
-                tol: 1e-8,
-                max_steps: 100_000,
-            },
-        ] {
-            v.push(Rung::Rod(SolverSettings {
-                rod_model: model,
-                guide_mass: GuideMass::Point,
-                integrator,
-                ..SolverSettings::default()
-            }));
-        }
-    }
+    v.extend(rod_rungs());
     v
+}
+
+/// The rod rungs both stability maps chart: Kirchhoff and Cosserat (point guide mass)
+/// at RK4 8, RK4 32 and adaptive 1e-8.
+pub(crate) fn rod_rungs() -> impl Iterator<Item = Rung> {
+    [RodModel::Kirchhoff, RodModel::Cosserat]
+        .into_iter()
+        .flat_map(|model| {
+            [
+                Integrator::Rk4 {
+                    steps_per_section: 8,
+                },
+                Integrator::Rk4 {
+                    steps_per_section: 32,
+                },
+                Integrator::Adaptive {
+                    tol: 1e-8,
+                    max_steps: 100_000,
+                },
+            ]
+            .into_iter()
+            .map(move |integrator| {
+                Rung::Rod(SolverSettings {
+                    rod_model: model,
+                    guide_mass: GuideMass::Point,
+                    integrator,
+                    ..SolverSettings::default()
+                })
+            })
+        })
 }
 
 /// The starts mapped for a rung: rod rungs cold, warm and with continuation; the

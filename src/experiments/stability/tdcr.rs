@@ -12,7 +12,7 @@ use crate::files::Scene;
 use crate::ladder::{CcSettings, PccSettings, Rung, TendonKinematics};
 use crate::loads::Loads;
 use crate::robot::Robot;
-use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
+use crate::settings::{GuideMass, SolverSettings};
 use crate::statics::Start;
 use crate::tendons::Actuation;
 use nalgebra::Vector3;
@@ -48,27 +48,7 @@ pub fn readings_settings() -> Vec<Rung> {
             ..PccSettings::default()
         }),
     ];
-    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
-        for integrator in [
-            Integrator::Rk4 {
-                steps_per_section: 8,
-            },
-            Integrator::Rk4 {
-                steps_per_section: 32,
-            },
-            Integrator::Adaptive {
-                tol: 1e-8,
-                max_steps: 100_000,
-            },
-        ] {
-            v.push(Rung::Rod(SolverSettings {
-                rod_model: model,
-                guide_mass: GuideMass::Point,
-                integrator,
-                ..SolverSettings::default()
-            }));
-        }
-    }
+    v.extend(super::rod_rungs());
     v
 }
 
