@@ -36,9 +36,10 @@ mod recording;
 mod report;
 mod run;
 mod stats;
+pub mod uncertainty;
 
 pub use crate::scene::calibration::{
-    CalibrationSpec, LengthUnit, ParamSpec, TransformSpec, MIN_HUBER_SIGMA,
+    CalibrationSpec, LengthUnit, ModelErrorSpec, ParamSpec, TransformSpec, MIN_HUBER_SIGMA,
 };
 pub use cc_model::CcModel;
 pub use conditioning::{Conditioning, InputTimeline, ReadingsHistory, MAX_GAP_S};
