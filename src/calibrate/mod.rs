@@ -59,8 +59,8 @@ pub use identify_assign::{
 };
 pub use jacobian::residuals_and_jacobian;
 pub use lm::{
-    central_differences, levenberg_marquardt, Bounds, Huber, LeastSquares, LmIteration, LmResult,
-    LmSettings, LmStatus,
+    central_differences, gradient_cosine, levenberg_marquardt, Bounds, Huber, LeastSquares,
+    LmIteration, LmResult, LmSettings, LmStatus, STATIONARY_COSINE,
 };
 pub use model::{finite_differences, CalibrationModel, RowFailure, Sensitivities, TensionModel};
 pub use readings_model::{ReadingsModel, SceneModel};
