@@ -193,6 +193,8 @@ fn a_fit_whose_steps_vanish_away_from_a_minimum_is_not_converged() {
     .unwrap();
     assert_eq!(res.status, LmStatus::Stalled, "{res:?}");
     assert_eq!(res.z, [0.0, 0.0]);
+    let why = res.last_rejection.as_deref().unwrap_or("");
+    assert!(why.contains("did not decrease"), "{why}");
 }
 
 #[test]

@@ -179,6 +179,9 @@ pub struct LmResult {
     pub weights: Vec<f64>,
     /// Jacobian at `z` (`residuals x unknowns`).
     pub jacobian: DMatrix<f64>,
+    /// Why the last rejected trial was rejected (`None` if none was): with
+    /// [`LmStatus::Stalled`], the reason the fit could not move.
+    pub last_rejection: Option<String>,
 }
 
 /// Box bounds on the unknowns (`-inf`/`+inf` for none).
@@ -279,6 +282,12 @@ fn stopped(
     }
 }
 
+/// `res` with the reason of the last rejected trial.
+fn rejected(last: &Option<String>, mut res: LmResult) -> LmResult {
+    res.last_rejection.clone_from(last);
+    res
+}
+
 /// Minimise the problem's cost from `z0` within `bounds` (see the module docs).
 /// `observer` sees every trial. The starting point must evaluate; later failures
 /// are rejected trials.
@@ -288,7 +297,10 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
     bounds: &Bounds,
     s: &LmSettings,
     observer: &mut dyn FnMut(&LmIteration),
-) -> Result<LmResult, P::Error> {
+) -> Result<LmResult, P::Error>
+where
+    P::Error: std::fmt::Display,
+{
     let (n, m) = (p.unknowns(), p.residual_count());
     let mut z = DVector::from_column_slice(z0);
     bounds.project(&mut z);
@@ -315,6 +327,7 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
     let mut r_new = vec![0.0; m];
     let mut w_new = vec![1.0; m];
     let mut jac_new = DMatrix::zeros(m, n);
+    let mut last_rejection: Option<String> = None;
     let finish = |z: DVector<f64>, status, iterations, evaluations, cost, r, w, jac| LmResult {
         z: z.as_slice().to_vec(),
         status,
@@ -324,18 +337,22 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
         residuals: r,
         weights: w,
         jacobian: jac,
+        last_rejection: None,
     };
     loop {
         if iterations >= s.max_iterations {
-            return Ok(finish(
-                z,
-                LmStatus::MaxIterations,
-                iterations,
-                evaluations,
-                cost,
-                r,
-                w,
-                jac,
+            return Ok(rejected(
+                &last_rejection,
+                finish(
+                    z,
+                    LmStatus::MaxIterations,
+                    iterations,
+                    evaluations,
+                    cost,
+                    r,
+                    w,
+                    jac,
+                ),
             ));
         }
         // free set: not held at a bound by an outward gradient
@@ -347,15 +364,18 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
             .collect();
         let gmax = free.iter().fold(0.0f64, |acc, &k| acc.max(g[k].abs()));
         if free.is_empty() || gmax <= 1e-15 * (1.0 + cost) {
-            return Ok(finish(
-                z,
-                LmStatus::Converged,
-                iterations,
-                evaluations,
-                cost,
-                r,
-                w,
-                jac,
+            return Ok(rejected(
+                &last_rejection,
+                finish(
+                    z,
+                    LmStatus::Converged,
+                    iterations,
+                    evaluations,
+                    cost,
+                    r,
+                    w,
+                    jac,
+                ),
             ));
         }
         let nf = free.len();
@@ -370,18 +390,22 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
             rhs[i] = -g[ki];
         }
         let Some(hf) = damped.cholesky().map(|c| c.solve(&rhs)) else {
+            last_rejection = Some("the damped normal equations are not positive definite".into());
             mu *= nu;
             nu *= 2.0;
             if !mu.is_finite() || nu > 1e15 {
-                return Ok(finish(
-                    z,
-                    LmStatus::Stalled,
-                    iterations,
-                    evaluations,
-                    cost,
-                    r,
-                    w,
-                    jac,
+                return Ok(rejected(
+                    &last_rejection,
+                    finish(
+                        z,
+                        LmStatus::Stalled,
+                        iterations,
+                        evaluations,
+                        cost,
+                        r,
+                        w,
+                        jac,
+                    ),
                 ));
             }
             continue;
@@ -394,22 +418,45 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
         let h = &z_new - &z;
         if h.norm() <= s.tolerance * (z.norm() + s.tolerance) {
             let status = stopped(&a, &g, &r, &w, &free, &z);
-            return Ok(finish(z, status, iterations, evaluations, cost, r, w, jac));
+            return Ok(rejected(
+                &last_rejection,
+                finish(z, status, iterations, evaluations, cost, r, w, jac),
+            ));
         }
         // predicted decrease of the local quadratic model (undamped, projected step)
         let predicted = -(g.dot(&h) + 0.5 * h.dot(&(&a * &h)));
         let trial = p.residuals(z_new.as_slice(), &mut r_new);
         evaluations += 1;
         let accepted = match trial {
-            Ok(()) if r_new.iter().all(|x| x.is_finite()) => {
+            Err(e) => {
+                last_rejection = Some(format!("the trial point's residuals failed: {e}"));
+                false
+            }
+            Ok(()) if !r_new.iter().all(|x| x.is_finite()) => {
+                last_rejection = Some("the trial point's residuals are not finite".into());
+                false
+            }
+            Ok(()) => {
                 let cost_new = weights_and_cost(&r_new, s.huber.as_ref(), &mut w_new);
                 let gain = (cost - cost_new) / predicted.max(f64::MIN_POSITIVE);
                 // a point whose Jacobian cannot be evaluated (e.g. a perturbed model
                 // solve fails) is rejected like a failed trial
-                if gain > 0.0
-                    && cost_new < cost
-                    && p.jacobian(z_new.as_slice(), &r_new, &mut jac_new).is_ok()
-                {
+                let jac_ok = if gain > 0.0 && cost_new < cost {
+                    match p.jacobian(z_new.as_slice(), &r_new, &mut jac_new) {
+                        Ok(()) => true,
+                        Err(e) => {
+                            last_rejection =
+                                Some(format!("the Jacobian at the trial point failed: {e}"));
+                            false
+                        }
+                    }
+                } else {
+                    last_rejection = Some(format!(
+                        "the cost did not decrease (cost {cost:.6e} -> {cost_new:.6e})"
+                    ));
+                    false
+                };
+                if jac_ok {
                     let decrease = cost - cost_new;
                     z = z_new;
                     std::mem::swap(&mut r, &mut r_new);
@@ -434,14 +481,16 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
                             })
                             .collect();
                         let status = stopped(&a, &g, &r, &w, &free, &z);
-                        return Ok(finish(z, status, iterations, evaluations, cost, r, w, jac));
+                        return Ok(rejected(
+                            &last_rejection,
+                            finish(z, status, iterations, evaluations, cost, r, w, jac),
+                        ));
                     }
                     true
                 } else {
                     false
                 }
             }
-            _ => false,
         };
         if !accepted {
             mu *= nu;
@@ -453,15 +502,18 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
                 accepted: false,
             });
             if !mu.is_finite() || nu > 1e15 {
-                return Ok(finish(
-                    z,
-                    LmStatus::Stalled,
-                    iterations,
-                    evaluations,
-                    cost,
-                    r,
-                    w,
-                    jac,
+                return Ok(rejected(
+                    &last_rejection,
+                    finish(
+                        z,
+                        LmStatus::Stalled,
+                        iterations,
+                        evaluations,
+                        cost,
+                        r,
+                        w,
+                        jac,
+                    ),
                 ));
             }
         }

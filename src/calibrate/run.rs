@@ -435,6 +435,17 @@ pub fn calibrate<M: CalibrationModel + Clone>(
     } else {
         res.status
     };
+    if status == LmStatus::Stalled {
+        warnings.push(format!(
+            "the fit stalled after {} accepted steps, away from a minimum: {}; the values are \
+             the last accepted point, not a fit (try other start values or bounds, or fewer \
+             parameters)",
+            res.iterations,
+            res.last_rejection
+                .as_deref()
+                .unwrap_or("no trial was rejected")
+        ));
+    }
     full = pb.expand(&res.z);
     pb.full = full.clone();
     pb.ensure_poses(&full[..ns])?;
