@@ -396,6 +396,7 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     );
     let pb = progress::bar(spec.max_iterations as u64, a.quiet);
     let started = std::time::Instant::now();
+    let dog = progress::Watchdog::stderr("calibrate");
     let report = calibrate(&setup, &settings, &mut |p| {
         let stage = match p.stage {
             Stage::Start => "start",
@@ -417,15 +418,18 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
             ),
             None => String::new(),
         };
-        if p.stage == Stage::Start {
-            pb.set_message(format!("model at the start values{rows}"));
+        let msg = if p.stage == Stage::Start {
+            format!("model at the start values{rows}")
         } else {
-            pb.set_message(format!(
-                "{stage}: cost {:.4e}, damping {:.1e}{rows}",
-                p.lm.cost, p.lm.damping
-            ));
-        }
+            format!(
+                "{stage}: iteration {}, cost {:.4e}, damping {:.1e}{rows}",
+                p.lm.iteration, p.lm.cost, p.lm.damping
+            )
+        };
+        dog.tick(&msg);
+        pb.set_message(msg);
     });
+    drop(dog);
     pb.finish_and_clear();
     let report = report?;
     print_report(&report, started.elapsed().as_secs_f64());

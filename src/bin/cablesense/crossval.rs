@@ -165,6 +165,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             first.rows.len()
         );
         let started = std::time::Instant::now();
+        let dog = crate::progress::Watchdog::stderr("crossval");
         let cv = cross_validate(
             &c.model,
             &c.params,
@@ -173,8 +174,17 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             &folds,
             &c.settings,
             c.robot_length_m,
-            &mut |_, _| {},
+            &mut |fold, p| {
+                dog.tick(&format!(
+                    "candidate {}, fold {}, LM iteration {}, cost {:.4e}",
+                    c.name,
+                    folds.names.get(fold).map(String::as_str).unwrap_or("?"),
+                    p.lm.iteration,
+                    p.lm.cost
+                ))
+            },
         )?;
+        drop(dog);
         if !a.quiet {
             println!(
                 "  {}: pooled {:.3} mm ({:.1} s)",
