@@ -339,6 +339,24 @@ where
         jacobian: jac,
         last_rejection: None,
     };
+    // no damping gives a decrease: the last accepted point, with the reason
+    macro_rules! stall {
+        () => {
+            return Ok(rejected(
+                &last_rejection,
+                finish(
+                    z,
+                    LmStatus::Stalled,
+                    iterations,
+                    evaluations,
+                    cost,
+                    r,
+                    w,
+                    jac,
+                ),
+            ))
+        };
+    }
     loop {
         if iterations >= s.max_iterations {
             return Ok(rejected(
@@ -394,19 +412,7 @@ where
             mu *= nu;
             nu *= 2.0;
             if !mu.is_finite() || nu > 1e15 {
-                return Ok(rejected(
-                    &last_rejection,
-                    finish(
-                        z,
-                        LmStatus::Stalled,
-                        iterations,
-                        evaluations,
-                        cost,
-                        r,
-                        w,
-                        jac,
-                    ),
-                ));
+                stall!();
             }
             continue;
         };
@@ -502,19 +508,7 @@ where
                 accepted: false,
             });
             if !mu.is_finite() || nu > 1e15 {
-                return Ok(rejected(
-                    &last_rejection,
-                    finish(
-                        z,
-                        LmStatus::Stalled,
-                        iterations,
-                        evaluations,
-                        cost,
-                        r,
-                        w,
-                        jac,
-                    ),
-                ));
+                stall!();
             }
         }
     }
