@@ -8,6 +8,7 @@ mod dual;
 mod kernels;
 mod lu;
 mod so3;
+pub(crate) mod step;
 pub(crate) mod warm;
 
 pub use banded::BandedLu;

@@ -23,6 +23,7 @@ use super::cables::nbr_f64;
 use super::intervals::{design_intensity, integrate, new_rec, LoadCtx};
 use super::{max_abs, Multi, NODE};
 use crate::integrate::State;
+use crate::math::step::StepRule;
 use crate::math::{Dual, Real};
 use crate::statics::plan::Plan;
 use crate::statics::{SolveReport, SolveStatus};
@@ -32,8 +33,9 @@ use nalgebra::{Matrix3, Vector3};
 const STEP_BUDGET: usize = 8;
 /// First continuation step in load intensity (then grown from the corrector ratio).
 const FIRST_STEP: f64 = 2.0;
-/// A step is rejected when the corrector moved this fraction of the predictor's move.
-const CORRECTOR_RATIO: f64 = 0.5;
+/// The step rule (`crate::math::step`): a step is rejected when the corrector moved
+/// more than half the predictor's move; steps grow at most threefold.
+const STEP_RULE: StepRule = StepRule { max_growth: 3.0 };
 /// Smallest continuation step (load scale) before the solve gives up (a fold).
 const MIN_STEP: f64 = 1e-5;
 /// Largest weight `h / (2 dl)` of the tangent difference in the second-order
@@ -183,10 +185,10 @@ impl Multi {
                     Err(_) => ratio = f64::INFINITY,
                 }
             }
-            let accept = ratio <= CORRECTOR_RATIO && sign == sign0;
+            let accept = STEP_RULE.accepts(ratio) && sign == sign0;
             // the ratio grows like h (tangent predictor) or h^2 (second order)
             let order = if prev_dl > 0.0 { 0.5 } else { 1.0 };
-            let grow = (0.8 * CORRECTOR_RATIO / ratio).powf(order).clamp(0.25, 3.0);
+            let grow = STEP_RULE.growth(ratio, order);
             if accept {
                 lam = target;
                 self.ok.clone_from(&self.nodes);
@@ -212,7 +214,7 @@ impl Multi {
             self.nodes.clone_from(&self.ok);
             self.tan.copy_from_slice(&self.tan_ok);
             self.lu_valid = false;
-            h = step * grow.min(0.5);
+            h = step * StepRule::after_rejection(grow);
             if h < MIN_STEP {
                 break;
             }

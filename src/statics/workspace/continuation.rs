@@ -2,6 +2,7 @@
 //! warm solves and Jacobi's test for conjugate points.
 
 use super::*;
+use crate::math::step::StepRule;
 
 /// Newton iterations a cold start gets before continuation takes over.
 const COLD_BUDGET: usize = 4;
@@ -16,9 +17,10 @@ const CONTINUATION_BUDGET: usize = 10;
 pub const CERTIFY_INTENSITY: f64 = 3.0;
 /// Largest load-intensity increment of one step of the branch-checked continuation.
 const CERTIFY_STEP: f64 = 2.0;
-/// A branch-checked continuation step is rejected (and halved) when the corrector
-/// moves the unknowns more than this fraction of the secant predictor's own move.
-const CORRECTOR_RATIO: f64 = 0.5;
+/// The branch-checked continuation's step rule: accepted while the corrector moves
+/// the unknowns by at most [`crate::math::step::CORRECTOR_RATIO`] of the predictor's own move; steps
+/// grow at most twofold.
+const STEP_RULE: StepRule = StepRule { max_growth: 2.0 };
 /// A warm solve has left its branch when, after the first step `d1`, Newton still moved
 /// the unknowns by more than `WARM_JUMP_RATIO |d1| + WARM_JUMP_FLOOR` (scaled units,
 /// max norm): its tangent step no longer described where it went.
@@ -152,7 +154,7 @@ impl Workspace {
     /// Branch-checked continuation (the branch guard for loads outside Jacobi's test):
     /// tangent predictor, steps capped at [`CERTIFY_STEP`] of load intensity, and a
     /// converged step is accepted only if
-    /// - the corrector moved the unknowns by at most [`CORRECTOR_RATIO`] of the
+    /// - the corrector moved the unknowns by at most [`crate::math::step::CORRECTOR_RATIO`] of the
     ///   predictor's own move (else it likely converged onto another branch), and
     /// - the shooting Jacobian's determinant kept the sign it has at the unloaded rod
     ///   (a sign change means the path passed a fold or bifurcation: past a fold the
@@ -192,9 +194,9 @@ impl Workspace {
             } else {
                 f64::INFINITY
             };
-            let accept = ratio <= CORRECTOR_RATIO && self.tangent(target) == Ok(sign0);
+            let accept = STEP_RULE.accepts(ratio) && self.tangent(target) == Ok(sign0);
             // next step from the ratio's linear growth in h, within [h/4, 2h]
-            let grow = (0.8 * CORRECTOR_RATIO / ratio).clamp(0.25, 2.0);
+            let grow = STEP_RULE.growth(ratio, 1.0);
             if accept {
                 lam = target;
                 self.x_ok.copy_from_slice(&self.x);
@@ -215,7 +217,7 @@ impl Workspace {
             };
             self.x.copy_from_slice(&self.x_ok);
             self.lu_valid = false;
-            step = h * grow.min(0.5);
+            step = h * StepRule::after_rejection(grow);
             if step < 1e-4 {
                 break;
             }
