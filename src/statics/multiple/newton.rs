@@ -5,14 +5,10 @@ use super::cables::nbr_f64;
 use super::intervals::{integrate, LoadCtx};
 use super::{max_abs, norm2, offset, Multi, BASE, NODE, NODE_R};
 use crate::integrate::State;
+use crate::math::newton::{backtrack, CHORD_CONTRACTION, MAX_CHORD_STEPS};
 use crate::math::{exp_so3, Dual, Real};
 use crate::statics::plan::Plan;
 use crate::statics::SolveStatus;
-
-/// A reused (chord) factorisation's full step must shrink `||r||_2` by this factor.
-const CHORD_CONTRACTION: f64 = 0.1;
-/// Chord steps per factorisation before it is refreshed anyway.
-const MAX_CHORD_STEPS: usize = 8;
 use nalgebra::{Matrix3, Vector3};
 
 /// `vee((E - E^T)/2)`: the rotation mismatch of `E = R_next^T R_end` (zero when the
@@ -247,21 +243,15 @@ impl Multi {
                 }
                 continue;
             }
-            let mut alpha = 1.0;
-            let mut accepted = false;
-            for _ in 0..30 {
+            let found = backtrack(f0, |alpha| {
                 self.step_into(plan, alpha, true);
-                if self.eval(plan, ld, true) && norm2(&self.res_trial) < (1.0 - 1e-4 * alpha) * f0 {
-                    accepted = true;
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            if !accepted {
+                self.eval(plan, ld, true).then(|| norm2(&self.res_trial))
+            });
+            let Some(alpha) = found else {
                 self.eval(plan, ld, false);
                 self.lu_valid = false;
                 return (SolveStatus::Stalled, it);
-            }
+            };
             self.accept(alpha);
             if alpha < 1.0 {
                 // far from the solution: do not reuse this Jacobian

@@ -2,11 +2,7 @@
 //! line search and the f64 evaluations it needs.
 
 use super::*;
-
-/// A reused (chord) Jacobian's full step must shrink `||r||_2` by this factor.
-const CHORD_CONTRACTION: f64 = 0.1;
-/// Chord steps allowed per Jacobian before it is refreshed anyway.
-const MAX_CHORD_STEPS: usize = 8;
+use crate::math::newton::{backtrack, CHORD_CONTRACTION, MAX_CHORD_STEPS};
 
 impl Workspace {
     /// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer
@@ -225,23 +221,17 @@ impl Workspace {
                 }
                 continue;
             }
-            let mut alpha = 1.0;
-            let mut accepted = false;
-            for _ in 0..30 {
+            let found = backtrack(f0, |alpha| {
                 for i in 0..n {
                     self.x_trial[i] = self.x[i] + alpha * self.dx[i];
                 }
-                if self.eval_trial(lam) && norm2(&self.b64.res) < (1.0 - 1e-4 * alpha) * f0 {
-                    accepted = true;
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            if !accepted {
+                self.eval_trial(lam).then(|| norm2(&self.b64.res))
+            });
+            let Some(alpha) = found else {
                 self.eval_at(false, lam);
                 self.lu_valid = false;
                 return (self.status_here(SolveStatus::Stalled), it);
-            }
+            };
             std::mem::swap(&mut self.x, &mut self.x_trial);
             self.res.copy_from_slice(&self.b64.res);
             self.noise.record(&self.x, lam, self.b64.local_tol);
