@@ -6,7 +6,7 @@
 //! `KHZ=N` the first N ticks of a 1 kHz control loop between the rows, `TOL_M=X` the
 //! tendon tolerance in m instead of the default, `COUPLING=arc|exact|condensed` the
 //! cable coupling instead of the scene's, `TOL=X` the shooting tolerance instead of the
-//! scene's)
+//! scene's, `ROLLBACK=0` the rollback policy off)
 use cablesense::Scene;
 use std::time::Instant;
 
@@ -37,6 +37,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scene.numerics.tolerance = tol;
     }
     let mut ws = scene.tendon_workspace()?;
+    // ROLLBACK=0: the rollback policy off (to time what it costs)
+    if std::env::var("ROLLBACK").is_ok_and(|v| v == "0") {
+        ws.set_rollback(false);
+    }
     // TOL_M=x: the tendon tolerance (m) instead of the default
     if let Some(tol) = env_parse::<f64>("TOL_M") {
         ws.set_tendon_settings(cablesense::tendons::TendonSettings {
