@@ -159,3 +159,123 @@ fn rollback_cost() {
         t_off[3]
     );
 }
+
+/// `numerics.tendons.max_passes` (a work budget per call): a budget of one rod
+/// evaluation ends the unreachable row with `budget_exhausted` after at most one,
+/// and the rows after it are bit-identical to a stream without it (the rollback
+/// applies as to any solve that does not converge).
+#[test]
+fn a_spent_budget_is_rolled_back_like_any_failed_row() {
+    use cablesense::statics::SolveStatus;
+    use cablesense::tendons::TendonSettings;
+    let (scene, rows) = val_rows();
+    let rows = &rows[..60];
+    let clean = run(&scene, rows, None, true);
+    let mut ws = scene.tendon_workspace().expect("workspace");
+    let unlimited = *ws.tendon_settings();
+    assert_eq!(unlimited.max_passes, None, "unbounded by default");
+    let one_pass = TendonSettings {
+        max_passes: Some(1),
+        ..unlimited
+    };
+    for (i, q) in rows.iter().enumerate() {
+        ws.solve_readings(q).expect("valid readings");
+        assert_eq!(outcome(&ws), clean[i], "row {i}");
+        if i == 20 {
+            ws.set_tendon_settings(one_pass).expect("valid settings");
+            let rep = ws.solve_readings(&UNREACHABLE).expect("valid readings");
+            assert_eq!(rep.status, SolveStatus::BudgetExhausted, "{rep:?}");
+            assert!(rep.forward_solves <= 1, "{rep:?}");
+            assert!(ws.rollback_pending());
+            ws.set_tendon_settings(unlimited).expect("valid settings");
+        }
+    }
+    // a wall-time budget already spent when the call starts: nothing evaluated
+    let tiny = TendonSettings {
+        time_budget_s: Some(1e-9),
+        ..unlimited
+    };
+    ws.set_tendon_settings(tiny).expect("valid settings");
+    let rep = ws.solve_readings(&UNREACHABLE).expect("valid readings");
+    assert_eq!(rep.status, SolveStatus::BudgetExhausted, "{rep:?}");
+    assert_eq!(rep.forward_solves, 0, "{rep:?}");
+}
+
+/// A stream run under a budget throughout: the rows that converge within it are
+/// bit-identical with and without an unreachable row between them, which ends with
+/// `budget_exhausted` within the budget and without the nested fallback.
+#[test]
+fn a_budgeted_stream_is_bit_identical_around_an_unreachable_row() {
+    use cablesense::statics::SolveStatus;
+    use cablesense::tendons::TendonSettings;
+    let (scene, rows) = val_rows();
+    let rows = &rows[..120];
+    // (warm val rows take 2-13 evaluations, two of the 443 27 and 32: a budget
+    // below what a stream's rows need makes every row after a cut one start
+    // farther away, docs/control-loop-budget.md)
+    let budget = 16;
+    let stream = |bad: Option<usize>| {
+        let mut ws = scene.tendon_workspace().expect("workspace");
+        ws.set_tendon_settings(TendonSettings {
+            max_passes: Some(budget),
+            ..*ws.tendon_settings()
+        })
+        .expect("valid settings");
+        let mut out = Vec::new();
+        for (i, q) in rows.iter().enumerate() {
+            let rep = ws.solve_readings(q).expect("valid readings");
+            assert!(rep.forward_solves <= budget, "row {i}: {rep:?}");
+            out.push(outcome(&ws));
+            if bad == Some(i) {
+                let rep = ws.solve_readings(&UNREACHABLE).expect("valid readings");
+                assert_eq!(rep.status, SolveStatus::BudgetExhausted, "{rep:?}");
+                assert!(rep.forward_solves <= budget, "{rep:?}");
+                // a budgeted call does not run the nested fallback
+                assert_eq!(rep.shooting_solves, 0, "{rep:?}");
+            }
+        }
+        out
+    };
+    let clean = stream(None);
+    let converged = clean.iter().filter(|o| o.0 == "Converged").count();
+    assert!(
+        converged > 100,
+        "{converged} of {} rows within {budget} passes",
+        rows.len()
+    );
+    assert_eq!(clean, stream(Some(30)));
+}
+
+/// The budget's settings are checked like the others.
+#[test]
+fn budget_settings_are_checked() {
+    use cablesense::tendons::TendonSettings;
+    let (scene, _) = val_rows();
+    let mut ws = scene.tendon_workspace().expect("workspace");
+    for (bad, field) in [
+        (
+            TendonSettings {
+                max_passes: Some(0),
+                ..Default::default()
+            },
+            "max_passes",
+        ),
+        (
+            TendonSettings {
+                time_budget_s: Some(-1.0),
+                ..Default::default()
+            },
+            "time_budget_s",
+        ),
+        (
+            TendonSettings {
+                time_budget_s: Some(f64::NAN),
+                ..Default::default()
+            },
+            "time_budget_s",
+        ),
+    ] {
+        let err = ws.set_tendon_settings(bad).expect_err(field).to_string();
+        assert!(err.contains(field), "{err}");
+    }
+}

@@ -54,7 +54,9 @@ typedef struct CsTendons CsTendons;
 // Forward solve outcome (`SolveStatus`).
 typedef struct CsSolveInfo {
   // 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-  // 5 unstable. Only 0 is a usable shape.
+  // 5 unstable, 6 budget_exhausted (a tendon solve's
+  // `numerics.tendons.max_passes` or `time_budget_s` ran out). Only 0 is a usable
+  // shape.
   int32_t status;
   // Newton iterations.
   uint32_t iterations;
@@ -76,7 +78,7 @@ typedef struct CsEstimateInfo {
 // Outcome of a solve from tendon readings (`TendonReport`).
 typedef struct CsTendonInfo {
   // 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-  // 5 unstable (as [`CsSolveInfo`]). Only 0 is a usable shape.
+  // 5 unstable, 6 budget_exhausted (as [`CsSolveInfo`]). Only 0 is a usable shape.
   int32_t status;
   // Newton iterations on the tensions.
   uint32_t iterations;

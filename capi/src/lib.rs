@@ -66,7 +66,9 @@ pub enum CsCode {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CsSolveInfo {
     /// 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-    /// 5 unstable. Only 0 is a usable shape.
+    /// 5 unstable, 6 budget_exhausted (a tendon solve's
+    /// `numerics.tendons.max_passes` or `time_budget_s` ran out). Only 0 is a usable
+    /// shape.
     pub status: i32,
     /// Newton iterations.
     pub iterations: u32,
@@ -92,7 +94,7 @@ pub struct CsEstimateInfo {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CsTendonInfo {
     /// 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-    /// 5 unstable (as [`CsSolveInfo`]). Only 0 is a usable shape.
+    /// 5 unstable, 6 budget_exhausted (as [`CsSolveInfo`]). Only 0 is a usable shape.
     pub status: i32,
     /// Newton iterations on the tensions.
     pub iterations: u32,
@@ -218,6 +220,7 @@ fn solve_code(s: SolveStatus) -> i32 {
         SolveStatus::IllConditioned => 3,
         SolveStatus::NonFinite => 4,
         SolveStatus::Unstable => 5,
+        SolveStatus::BudgetExhausted => 6,
     }
 }
 

@@ -121,6 +121,18 @@ pub struct TendonWorkspace {
     joint: joint::JointBufs,
     /// The warm state to return to after a solve that did not converge.
     rollback: Rollback,
+    /// The current call's budget ([`TendonSettings::max_passes`], `time_budget_s`).
+    budget: Budget,
+}
+
+/// Where the current call stands against its budget (set at the start of every
+/// solve: not warm state).
+#[derive(Clone, Copy, Default)]
+struct Budget {
+    /// `time_budget_s` after the call's start.
+    deadline: Option<std::time::Instant>,
+    /// The budget ran out: every later evaluation of this call is refused.
+    spent: bool,
 }
 
 crate::math::warm::warm_by_copy!(TendonReport);
@@ -145,7 +157,9 @@ impl crate::math::warm::WarmCopy for TendonWorkspace {
         crate::math::warm::warm_fields!(self, src, copy: [
             ws, free, t, t_trial, taut, taut_before, g, step, theta, sens, lengths, lu,
             sens_fresh, sign, last_q, factors, mean_factor, has_solution, report, joint,
-        ], keep: [driven, mech, columns, free0, geo, n_extra, mu, friction, x_ref, rollback]);
+        ], keep: [
+            driven, mech, columns, free0, geo, n_extra, mu, friction, x_ref, rollback, budget,
+        ]);
     }
 }
 
@@ -274,6 +288,7 @@ impl TendonWorkspace {
                 good: None,
                 pending: false,
             },
+            budget: Budget::default(),
         };
         me.reference()?;
         // the rollback's copy: allocated once here, refreshed without allocating
@@ -536,6 +551,13 @@ impl TendonWorkspace {
     /// The solve of checked readings.
     fn solve_checked(&mut self, readings_m: &[f64], start: Start) -> TendonReport {
         let p = self.driven.len();
+        self.budget = Budget {
+            deadline: self
+                .tendon_settings()
+                .time_budget_s
+                .map(|t| std::time::Instant::now() + std::time::Duration::from_secs_f64(t)),
+            spent: false,
+        };
         // the free lengths the current point belongs to (joint path's continuation)
         self.joint.free_prev.copy_from_slice(&self.free);
         for (i, reading) in readings_m.iter().enumerate() {
@@ -583,6 +605,9 @@ impl TendonWorkspace {
             return self.finish();
         }
         self.joint.at_solution = false;
+        if self.budget_ends_call() {
+            return self.finish();
+        }
         // a cold start takes the same path from the reference equilibrium (zero
         // readings, the pretensions: solved once at construction, so the start does
         // not depend on earlier rows), continued in the readings by `solve_joint`'s
@@ -601,11 +626,17 @@ impl TendonWorkspace {
                 return self.finish();
             }
             self.joint.at_solution = false;
+            if self.budget_ends_call() {
+                return self.finish();
+            }
         }
         self.solve_nested(start)
     }
 
     fn finish(&mut self) -> TendonReport {
+        if self.budget.spent && !self.report.status.is_converged() {
+            self.report.status = SolveStatus::BudgetExhausted;
+        }
         if self.report.status.is_converged() {
             self.joint
                 .push_history(self.ws.unknowns_vector(), &self.t, &self.free);
@@ -614,6 +645,40 @@ impl TendonWorkspace {
         self.report.slack = self.taut.iter().filter(|t| !**t).count();
         self.has_solution = self.report.status.is_converged() || self.has_solution;
         self.report
+    }
+
+    /// May this call run one more rod evaluation? `false` once its budget
+    /// ([`TendonSettings::max_passes`], `time_budget_s`) is spent; the call then
+    /// ends with [`SolveStatus::BudgetExhausted`] (`finish`). No allocation.
+    fn within_budget(&mut self) -> bool {
+        if self.budget.spent {
+            return false;
+        }
+        let s = self.tendon_settings();
+        let spent = s
+            .max_passes
+            .is_some_and(|m| self.report.forward_solves >= m)
+            || self
+                .budget
+                .deadline
+                .is_some_and(|d| std::time::Instant::now() >= d);
+        self.budget.spent = spent;
+        !spent
+    }
+
+    /// After the joint path did not converge: does the budget end the call here?
+    /// It does when it is spent, and whenever a budget is set at all: a budgeted
+    /// call runs the joint path only, because one nested shooting solve (the
+    /// fallback's unit of work) cannot be interrupted by the checks and costs
+    /// about 10 ms on the FTDCR v4 robot (an unreachable row: 2 of them in 22-38
+    /// ms, 6 in 60-62 ms, `examples/tendon_profile`), past any budget of a
+    /// control loop. The call then ends with [`SolveStatus::BudgetExhausted`].
+    fn budget_ends_call(&mut self) -> bool {
+        let s = self.tendon_settings();
+        if s.max_passes.is_some() || s.time_budget_s.is_some() {
+            self.budget.spent = true;
+        }
+        self.budget.spent
     }
 
     fn merit(&self) -> f64 {

@@ -588,6 +588,9 @@ impl TendonWorkspace {
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
     /// `max(|r|/tol, |G|/tol_G)` (converged at <= 1), `None` if the pass failed.
     fn joint_evaluate(&mut self) -> Option<f64> {
+        if !self.within_budget() {
+            return None;
+        }
         self.ref_leave();
         let p = self.driven.len();
         self.theta[..p].copy_from_slice(&self.t);
@@ -610,6 +613,10 @@ impl TendonWorkspace {
 
     /// Restore the row's starting point for the nested method; `false`.
     fn joint_hand_back(&mut self) -> bool {
+        if self.budget.spent {
+            // no evaluation left: the call ends where it stopped (`solve_checked`)
+            return false;
+        }
         self.joint_inner_tolerance(0.0);
         self.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);
