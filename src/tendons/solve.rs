@@ -56,6 +56,8 @@ mod nested;
 mod loads;
 // Why a row did not converge, with the tendons named by their readings columns.
 mod diagnose;
+// The budget of one call (`TendonSettings::max_passes`, `time_budget_s`).
+mod budget;
 
 /// Outcome of one solve from readings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -129,17 +131,7 @@ pub struct TendonWorkspace {
     /// The warm state to return to after a solve that did not converge.
     rollback: Rollback,
     /// The current call's budget ([`TendonSettings::max_passes`], `time_budget_s`).
-    budget: Budget,
-}
-
-/// Where the current call stands against its budget (set at the start of every
-/// solve: not warm state).
-#[derive(Clone, Copy, Default)]
-struct Budget {
-    /// `time_budget_s` after the call's start.
-    deadline: Option<std::time::Instant>,
-    /// The budget ran out: every later evaluation of this call is refused.
-    spent: bool,
+    budget: budget::Budget,
 }
 
 crate::math::warm::warm_by_copy!(TendonReport);
@@ -295,7 +287,7 @@ impl TendonWorkspace {
                 good: None,
                 pending: false,
             },
-            budget: Budget::default(),
+            budget: budget::Budget::default(),
         };
         me.reference()?;
         // the rollback's copy: allocated once here, refreshed without allocating
@@ -566,13 +558,7 @@ impl TendonWorkspace {
     /// The solve of checked readings.
     fn solve_checked(&mut self, readings_m: &[f64], start: Start) -> TendonReport {
         let p = self.driven.len();
-        self.budget = Budget {
-            deadline: self
-                .tendon_settings()
-                .time_budget_s
-                .map(|t| std::time::Instant::now() + std::time::Duration::from_secs_f64(t)),
-            spent: false,
-        };
+        self.budget_begin();
         // the free lengths the current point belongs to (joint path's continuation)
         self.joint.free_prev.copy_from_slice(&self.free);
         for (i, reading) in readings_m.iter().enumerate() {
@@ -616,8 +602,8 @@ impl TendonWorkspace {
             self.joint.at_solution = true;
             return self.finish();
         }
-        self.joint.at_solution = false;
-        if self.budget_ends_call() {
+        self.joint_failed();
+        if self.budget.spent {
             return self.finish();
         }
         // a cold start takes the same path from the reference equilibrium (zero
@@ -627,8 +613,15 @@ impl TendonWorkspace {
         // the straight rod follows. Why: on the FTDCR v4 val rows the nested cold
         // solve costs ~1e5 `f64` right-hand sides a row (its shooting continuation
         // and branch checks at every tension iterate), the path from the reference
-        // a few thousand.
-        if start == Start::Cold && self.tendon_settings().joint_newton && !self.x_ref.is_empty() {
+        // a few thousand. Under a budget a warm row that the joint path did not
+        // reach takes this path too, with what is left of the budget (`budget`
+        // module docs: a row cut short is rolled back, and the rows after it
+        // then start a step farther away).
+        let from_ref = start == Start::Cold || self.budget.limited;
+        if from_ref && self.tendon_settings().joint_newton && !self.x_ref.is_empty() {
+            if start == Start::Warm {
+                self.budget_second_chance();
+            }
             self.joint.free_prev.copy_from_slice(&self.free0);
             self.ws.adopt_unknowns(&self.x_ref, false);
             self.joint.forget_jacobian();
@@ -637,12 +630,24 @@ impl TendonWorkspace {
                 self.joint.at_solution = true;
                 return self.finish();
             }
-            self.joint.at_solution = false;
-            if self.budget_ends_call() {
-                return self.finish();
-            }
+            self.joint_failed();
+        }
+        if self.budget_ends_call() {
+            return self.finish();
         }
         self.solve_nested(start)
+    }
+
+    /// The joint path did not reach the row: whatever status a step of it left
+    /// (an intermediate continuation step or a friction round ends `Converged` at
+    /// its own, looser target) is not the row's. Without this a budgeted call that
+    /// stopped after such a step reported `converged` at a point that is not an
+    /// equilibrium, kept it as warm state and started the next rows from there
+    /// (FTDCR v4 val line 72 under `max_passes = 16`: the 60 rows after it ended
+    /// `budget_exhausted`).
+    fn joint_failed(&mut self) {
+        self.joint.at_solution = false;
+        self.report.status = SolveStatus::MaxIterations;
     }
 
     /// The joint path, then the capstan factors of its shape; while they move, the
@@ -673,40 +678,6 @@ impl TendonWorkspace {
         self.report.slack = self.taut.iter().filter(|t| !**t).count();
         self.has_solution = self.report.status.is_converged() || self.has_solution;
         self.report
-    }
-
-    /// May this call run one more rod evaluation? `false` once its budget
-    /// ([`TendonSettings::max_passes`], `time_budget_s`) is spent; the call then
-    /// ends with [`SolveStatus::BudgetExhausted`] (`finish`). No allocation.
-    fn within_budget(&mut self) -> bool {
-        if self.budget.spent {
-            return false;
-        }
-        let s = self.tendon_settings();
-        let spent = s
-            .max_passes
-            .is_some_and(|m| self.report.forward_solves >= m)
-            || self
-                .budget
-                .deadline
-                .is_some_and(|d| std::time::Instant::now() >= d);
-        self.budget.spent = spent;
-        !spent
-    }
-
-    /// After the joint path did not converge: does the budget end the call here?
-    /// It does when it is spent, and whenever a budget is set at all: a budgeted
-    /// call runs the joint path only, because one nested shooting solve (the
-    /// fallback's unit of work) cannot be interrupted by the checks and costs
-    /// about 10 ms on the FTDCR v4 robot (an unreachable row: 2 of them in 22-38
-    /// ms, 6 in 60-62 ms, `examples/tendon_profile`), past any budget of a
-    /// control loop. The call then ends with [`SolveStatus::BudgetExhausted`].
-    fn budget_ends_call(&mut self) -> bool {
-        let s = self.tendon_settings();
-        if s.max_passes.is_some() || s.time_budget_s.is_some() {
-            self.budget.spent = true;
-        }
-        self.budget.spent
     }
 
     fn merit(&self) -> f64 {
