@@ -107,8 +107,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .transpose()?;
     for _ in 0..repeat {
         for row in &rows {
-            let c0 = ws.workspace().rhs_counts();
             let t = Instant::now();
+            // a pending rollback restores the counters too: count from after it
+            ws.apply_rollback();
+            let c0 = ws.workspace().rhs_counts();
             let rep = if cold {
                 ws.solve_readings_from(&row.readings_m, cablesense::Start::Cold)?
             } else {

@@ -128,10 +128,12 @@ pub struct TendonSettings {
     /// evaluation: a call that has run `max_passes` returns at once with status
     /// `budget_exhausted` and the state where it stopped (rolled back before the
     /// next call when the rollback is on). A budgeted call runs the joint path
-    /// only: when it hands back, the call ends with the same status instead of
-    /// running the nested fallback (one of whose shooting solves costs milliseconds).
-    /// Default none (unbounded, the nested fallback included). Sizes and overshoot:
-    /// docs/control-loop-budget.md.
+    /// only: the warm predictor and Newton from the last converged row, then, when
+    /// they do not reach the row, the cold joint path from the reference
+    /// equilibrium with what is left; when that hands back too, the call ends with
+    /// the same status instead of running the nested fallback (one of whose
+    /// shooting solves costs milliseconds). Default none (unbounded, the nested
+    /// fallback included). Sizes and overshoot: docs/control-loop-budget.md.
     pub max_passes: Option<usize>,
     /// Wall-time budget of one solve call (s), checked where `max_passes` is (before
     /// each rod evaluation), with the same status and the same rule for the nested

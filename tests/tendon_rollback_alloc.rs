@@ -50,6 +50,8 @@ fn tendon_rollback_does_not_allocate() {
 
     // under a work budget (`numerics.tendons.max_passes`) the unreachable rows end
     // with `budget_exhausted` and allocate nothing either, nor do the rows after them
+    // (both take the budget's cold path from the reference when the warm one hands
+    // back: its kept Jacobian's buffers are sized at construction)
     ws.set_tendon_settings(cablesense::tendons::TendonSettings {
         max_passes: Some(BUDGET),
         ..*ws.tendon_settings()
