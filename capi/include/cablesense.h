@@ -291,6 +291,21 @@ enum CsCode cs_tendons_solve(struct CsTendons *t,
                              int32_t warm,
                              struct CsTendonInfo *info);
 
+// Set the budget of every later [`cs_tendons_solve`] on this handle (the
+// scene's `numerics.tendons.max_passes` and `time_budget_s`): at most
+// `max_passes` rod evaluations (0: no limit) and `time_budget_s` seconds of wall
+// time (0: no limit) per call. A call that runs out returns status 6
+// (`budget_exhausted`) in [`CsTendonInfo`] at about the budget (overshoot: one
+// evaluation, or one Jacobian sweep and the evaluation after it), allocates
+// nothing, and is rolled back like any solve that does not converge. A budgeted
+// call does not run the nested fallback (docs/control-loop-budget.md).
+// `max_passes` above 100 000 or a negative or non-finite `time_budget_s` is
+// `CS_CODE_BAD_ARGUMENT` and changes nothing.
+//
+// # Safety
+// `t` is a live handle.
+enum CsCode cs_tendons_set_budget(struct CsTendons *t, size_t max_passes, double time_budget_s);
+
 // Why the last solve from readings ended as it did
 // (`TendonWorkspace::diagnose`: as [`cs_model_diagnosis`], with each pulled-in
 // tendon named by its readings column and the bend its pull asks for), as text in

@@ -829,6 +829,38 @@ pub unsafe extern "C" fn cs_tendons_solve(
     })
 }
 
+/// Set the budget of every later [`cs_tendons_solve`] on this handle (the
+/// scene's `numerics.tendons.max_passes` and `time_budget_s`): at most
+/// `max_passes` rod evaluations (0: no limit) and `time_budget_s` seconds of wall
+/// time (0: no limit) per call. A call that runs out returns status 6
+/// (`budget_exhausted`) in [`CsTendonInfo`] at about the budget (overshoot: one
+/// evaluation, or one Jacobian sweep and the evaluation after it), allocates
+/// nothing, and is rolled back like any solve that does not converge. A budgeted
+/// call does not run the nested fallback (docs/control-loop-budget.md).
+/// `max_passes` above 100 000 or a negative or non-finite `time_budget_s` is
+/// `CS_CODE_BAD_ARGUMENT` and changes nothing.
+///
+/// # Safety
+/// `t` is a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_set_budget(
+    t: *mut CsTendons,
+    max_passes: usize,
+    time_budget_s: f64,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
+        let settings = cablesense::tendons::TendonSettings {
+            max_passes: (max_passes != 0).then_some(max_passes),
+            time_budget_s: (time_budget_s != 0.0).then_some(time_budget_s),
+            ..*h.ws.tendon_settings()
+        };
+        h.ws.set_tendon_settings(settings)
+            .map_err(|e| bad(e.to_string()))
+    })
+}
+
 /// Why the last solve from readings ended as it did
 /// (`TendonWorkspace::diagnose`: as [`cs_model_diagnosis`], with each pulled-in
 /// tendon named by its readings column and the bend its pull asks for), as text in
