@@ -6,7 +6,9 @@
 //! `KHZ=N` the first N ticks of a 1 kHz control loop between the rows, `TOL_M=X` the
 //! tendon tolerance in m instead of the default, `COUPLING=arc|exact|condensed` the
 //! cable coupling instead of the scene's, `TOL=X` the shooting tolerance instead of the
-//! scene's)
+//! scene's, `ROLLBACK=0` the rollback policy off, `MAX_PASSES=N` a work budget per call,
+//! `TIME_BUDGET_US=X` a wall-time budget per call, `BAD_EVERY=K` an unreachable row
+//! (one tendon pulled in 50 mm) after every K-th row, timed with the rows)
 use cablesense::Scene;
 use std::time::Instant;
 
@@ -37,6 +39,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scene.numerics.tolerance = tol;
     }
     let mut ws = scene.tendon_workspace()?;
+    // ROLLBACK=0: the rollback policy off (to time what it costs)
+    if std::env::var("ROLLBACK").is_ok_and(|v| v == "0") {
+        ws.set_rollback(false);
+    }
     // TOL_M=x: the tendon tolerance (m) instead of the default
     if let Some(tol) = env_parse::<f64>("TOL_M") {
         ws.set_tendon_settings(cablesense::tendons::TendonSettings {
@@ -44,6 +50,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..Default::default()
         })?;
     }
+    // MAX_PASSES=n, TIME_BUDGET_US=x: the per-call budget (`numerics.tendons`)
+    let max_passes = env_parse::<usize>("MAX_PASSES");
+    let time_budget_s = env_parse::<f64>("TIME_BUDGET_US").map(|us| us * 1e-6);
+    if max_passes.is_some() || time_budget_s.is_some() {
+        ws.set_tendon_settings(cablesense::tendons::TendonSettings {
+            max_passes,
+            time_budget_s,
+            ..*ws.tendon_settings()
+        })?;
+    }
+    let bad_every = env_parse::<usize>("BAD_EVERY");
     let mut parser = scene.readings_parser(&ws);
     let text = std::fs::read_to_string(data)?;
     let mut rows: Vec<_> = text
@@ -72,6 +89,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         rows = ticks;
     }
+    if let Some(k) = bad_every.filter(|&k| k > 0) {
+        let mut bad = rows[0].clone();
+        bad.readings_m.iter_mut().for_each(|q| *q = 0.0);
+        bad.readings_m[0] = 0.05;
+        bad.line = 0;
+        rows = rows
+            .chunks(k)
+            .flat_map(|c| c.iter().cloned().chain(std::iter::once(bad.clone())))
+            .collect();
+    }
     let (mut f_all, mut d_all, mut t_all) = (0u64, 0u64, 0.0);
     let mut per_row = Vec::new();
     let mut bad = 0;
@@ -80,8 +107,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .transpose()?;
     for _ in 0..repeat {
         for row in &rows {
-            let c0 = ws.workspace().rhs_counts();
             let t = Instant::now();
+            // a pending rollback restores the counters too: count from after it
+            ws.apply_rollback();
+            let c0 = ws.workspace().rhs_counts();
             let rep = if cold {
                 ws.solve_readings_from(&row.readings_m, cablesense::Start::Cold)?
             } else {
@@ -133,10 +162,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut f: Vec<u64> = per_row.iter().map(|r| r.1).collect();
     f.sort();
     println!(
-        "{n} rows ({bad} not converged): mean {:.0} us, median {:.0} us, p95 {:.0} us; f64 RHS mean {:.0} median {}, dual RHS mean {:.1}",
+        "{n} rows ({bad} not converged): mean {:.0} us, median {:.0} us, p95 {:.0} us, p99 {:.0} us, max {:.0} us; f64 RHS mean {:.0} median {}, dual RHS mean {:.1}",
         t_all / n as f64 * 1e6,
         times[n / 2] * 1e6,
         times[n * 95 / 100] * 1e6,
+        times[n * 99 / 100] * 1e6,
+        times[n - 1] * 1e6,
         f_all as f64 / n as f64,
         f[n / 2],
         d_all as f64 / n as f64

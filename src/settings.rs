@@ -122,6 +122,24 @@ pub struct TendonSettings {
     /// pull on the two-segment TDCR's 0.1 m segments ran 108 shooting solves in 2.5 s
     /// before stalling.
     pub max_shooting_solves: usize,
+    /// Work budget of one solve call, in rod evaluations
+    /// ([`crate::tendons::TendonReport::forward_solves`]: the joint path's `f64`
+    /// passes of the whole rod, line-search trials included). Checked before each
+    /// evaluation: a call that has run `max_passes` returns at once with status
+    /// `budget_exhausted` and the state where it stopped (rolled back before the
+    /// next call when the rollback is on). A budgeted call runs the joint path
+    /// only: the warm predictor and Newton from the last converged row, then, when
+    /// they do not reach the row, the cold joint path from the reference
+    /// equilibrium with what is left; when that hands back too, the call ends with
+    /// the same status instead of running the nested fallback (one of whose
+    /// shooting solves costs milliseconds). Default none (unbounded, the nested
+    /// fallback included). Sizes and overshoot: docs/control-loop-budget.md.
+    pub max_passes: Option<usize>,
+    /// Wall-time budget of one solve call (s), checked where `max_passes` is (before
+    /// each rod evaluation), with the same status and the same rule for the nested
+    /// fallback. Default none. Results then depend on the machine's speed (use
+    /// `max_passes` for reproducible streams).
+    pub time_budget_s: Option<f64>,
 }
 
 impl Default for TendonSettings {
@@ -131,6 +149,8 @@ impl Default for TendonSettings {
             tolerance_m: 1e-12,
             joint_newton: true,
             max_shooting_solves: 200,
+            max_passes: None,
+            time_budget_s: None,
         }
     }
 }
@@ -144,12 +164,16 @@ impl TendonSettings {
     /// Check every field (names them as `numerics.tendons.*`).
     pub fn validate(&self) -> Result<(), ModelError> {
         ModelError::positive("numerics.tendons.tolerance_m", self.tolerance_m)?;
+        if let Some(t) = self.time_budget_s {
+            ModelError::positive("numerics.tendons.time_budget_s", t)?;
+        }
         for (field, v) in [
             ("numerics.tendons.max_iterations", self.max_iterations),
             (
                 "numerics.tendons.max_shooting_solves",
                 self.max_shooting_solves,
             ),
+            ("numerics.tendons.max_passes", self.max_passes.unwrap_or(1)),
         ] {
             if v == 0 || v > 100_000 {
                 return Err(ModelError::OutOfRange {

@@ -18,6 +18,7 @@ mod estimate_common;
 mod arc_coupling;
 mod auto_readings;
 mod bad_input_catalogue;
+mod budget;
 mod calibrate_cli;
 mod calibrate_conditioning;
 mod calibrate_crossval;

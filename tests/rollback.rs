@@ -28,7 +28,7 @@ pub fn val_rows() -> (Scene, Vec<Vec<f64>>) {
 }
 
 /// What a row gives a caller, as bits: status, tip, tensions, iterations.
-fn outcome(ws: &TendonWorkspace) -> (String, Vec<u64>, usize) {
+pub fn outcome(ws: &TendonWorkspace) -> (String, Vec<u64>, usize) {
     let mut bits: Vec<u64> = ws.tip_position().iter().map(|v| v.to_bits()).collect();
     bits.extend(ws.tensions().iter().map(|v| v.to_bits()));
     let r = ws.report();

@@ -47,4 +47,37 @@ fn tendon_rollback_does_not_allocate() {
     assert_eq!(restored, 5, "rows after an unreachable one");
     eprintln!("unreachable rows: {bad_allocs} allocations in 6");
     assert_eq!(good_allocs, 0, "{good_allocs} allocations in 60 rows");
+
+    // under a work budget (`numerics.tendons.max_passes`) the unreachable rows end
+    // with `budget_exhausted` and allocate nothing either, nor do the rows after them
+    // (both take the budget's cold path from the reference when the warm one hands
+    // back: its kept Jacobian's buffers are sized at construction)
+    ws.set_tendon_settings(cablesense::tendons::TendonSettings {
+        max_passes: Some(BUDGET),
+        ..*ws.tendon_settings()
+    })
+    .unwrap();
+    let (mut allocs, mut bad_counts, mut exhausted) = (0, Vec::new(), 0);
+    for (k, q) in rows[80..140].iter().enumerate() {
+        let (n, _) = counted(|| {
+            ws.solve_readings(q).unwrap();
+        });
+        allocs += n;
+        if k % 10 == 9 {
+            let mut status = None;
+            let (n, _) = counted(|| status = Some(ws.solve_readings(&bad).unwrap().status));
+            bad_counts.push(n);
+            exhausted += usize::from(status == Some(cablesense::SolveStatus::BudgetExhausted));
+        }
+    }
+    eprintln!("budgeted unreachable rows: allocations {bad_counts:?}");
+    assert_eq!(exhausted, 6, "unreachable rows ended by the budget");
+    assert_eq!(allocs, 0, "{allocs} allocations in 60 budgeted rows");
+    assert_eq!(
+        bad_counts, [0; 6],
+        "allocations in the budgeted unreachable rows"
+    );
 }
+
+/// Rod evaluations a call may run in the budgeted part of the test.
+const BUDGET: usize = 8;

@@ -54,7 +54,9 @@ typedef struct CsTendons CsTendons;
 // Forward solve outcome (`SolveStatus`).
 typedef struct CsSolveInfo {
   // 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-  // 5 unstable. Only 0 is a usable shape.
+  // 5 unstable, 6 budget_exhausted (a tendon solve's
+  // `numerics.tendons.max_passes` or `time_budget_s` ran out). Only 0 is a usable
+  // shape.
   int32_t status;
   // Newton iterations.
   uint32_t iterations;
@@ -76,7 +78,7 @@ typedef struct CsEstimateInfo {
 // Outcome of a solve from tendon readings (`TendonReport`).
 typedef struct CsTendonInfo {
   // 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-  // 5 unstable (as [`CsSolveInfo`]). Only 0 is a usable shape.
+  // 5 unstable, 6 budget_exhausted (as [`CsSolveInfo`]). Only 0 is a usable shape.
   int32_t status;
   // Newton iterations on the tensions.
   uint32_t iterations;
@@ -288,6 +290,21 @@ enum CsCode cs_tendons_solve(struct CsTendons *t,
                              size_t n,
                              int32_t warm,
                              struct CsTendonInfo *info);
+
+// Set the budget of every later [`cs_tendons_solve`] on this handle (the
+// scene's `numerics.tendons.max_passes` and `time_budget_s`): at most
+// `max_passes` rod evaluations (0: no limit) and `time_budget_s` seconds of wall
+// time (0: no limit) per call. A call that runs out returns status 6
+// (`budget_exhausted`) in [`CsTendonInfo`] at about the budget (overshoot: one
+// evaluation, or one Jacobian sweep and the evaluation after it), allocates
+// nothing, and is rolled back like any solve that does not converge. A budgeted
+// call does not run the nested fallback (docs/control-loop-budget.md).
+// `max_passes` above 100 000 or a negative or non-finite `time_budget_s` is
+// `CS_CODE_BAD_ARGUMENT` and changes nothing.
+//
+// # Safety
+// `t` is a live handle.
+enum CsCode cs_tendons_set_budget(struct CsTendons *t, size_t max_passes, double time_budget_s);
 
 // Why the last solve from readings ended as it did
 // (`TendonWorkspace::diagnose`: as [`cs_model_diagnosis`], with each pulled-in

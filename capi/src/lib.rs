@@ -66,7 +66,9 @@ pub enum CsCode {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CsSolveInfo {
     /// 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-    /// 5 unstable. Only 0 is a usable shape.
+    /// 5 unstable, 6 budget_exhausted (a tendon solve's
+    /// `numerics.tendons.max_passes` or `time_budget_s` ran out). Only 0 is a usable
+    /// shape.
     pub status: i32,
     /// Newton iterations.
     pub iterations: u32,
@@ -92,7 +94,7 @@ pub struct CsEstimateInfo {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CsTendonInfo {
     /// 0 converged, 1 max_iterations, 2 stalled, 3 ill_conditioned, 4 non_finite,
-    /// 5 unstable (as [`CsSolveInfo`]). Only 0 is a usable shape.
+    /// 5 unstable, 6 budget_exhausted (as [`CsSolveInfo`]). Only 0 is a usable shape.
     pub status: i32,
     /// Newton iterations on the tensions.
     pub iterations: u32,
@@ -218,6 +220,7 @@ fn solve_code(s: SolveStatus) -> i32 {
         SolveStatus::IllConditioned => 3,
         SolveStatus::NonFinite => 4,
         SolveStatus::Unstable => 5,
+        SolveStatus::BudgetExhausted => 6,
     }
 }
 
@@ -823,6 +826,38 @@ pub unsafe extern "C" fn cs_tendons_solve(
             };
         }
         Ok(())
+    })
+}
+
+/// Set the budget of every later [`cs_tendons_solve`] on this handle (the
+/// scene's `numerics.tendons.max_passes` and `time_budget_s`): at most
+/// `max_passes` rod evaluations (0: no limit) and `time_budget_s` seconds of wall
+/// time (0: no limit) per call. A call that runs out returns status 6
+/// (`budget_exhausted`) in [`CsTendonInfo`] at about the budget (overshoot: one
+/// evaluation, or one Jacobian sweep and the evaluation after it), allocates
+/// nothing, and is rolled back like any solve that does not converge. A budgeted
+/// call does not run the nested fallback (docs/control-loop-budget.md).
+/// `max_passes` above 100 000 or a negative or non-finite `time_budget_s` is
+/// `CS_CODE_BAD_ARGUMENT` and changes nothing.
+///
+/// # Safety
+/// `t` is a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_set_budget(
+    t: *mut CsTendons,
+    max_passes: usize,
+    time_budget_s: f64,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
+        let settings = cablesense::tendons::TendonSettings {
+            max_passes: (max_passes != 0).then_some(max_passes),
+            time_budget_s: (time_budget_s != 0.0).then_some(time_budget_s),
+            ..*h.ws.tendon_settings()
+        };
+        h.ws.set_tendon_settings(settings)
+            .map_err(|e| bad(e.to_string()))
     })
 }
 

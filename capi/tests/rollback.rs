@@ -82,6 +82,49 @@ fn a_failed_row_does_not_change_the_following_rows() {
     }
 }
 
+/// A budget per call through the C ABI (`cs_tendons_set_budget`): one rod
+/// evaluation ends the unreachable row with status 6 (`budget_exhausted`), the
+/// rows after it are bit-identical to a handle without it, 16 evaluations let
+/// every val row converge, and a bad budget is `CS_CODE_BAD_ARGUMENT` naming the
+/// field. 0 means no limit.
+#[test]
+fn a_budget_limited_call_returns_budget_exhausted() {
+    let rows = &val_rows()[..40];
+    let (a, b) = (handle(), handle());
+    let bad = [0.05, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    // SAFETY: live handles.
+    unsafe {
+        assert_eq!(cs_tendons_set_budget(a, 16, 0.0), CsCode::Ok);
+        assert_eq!(cs_tendons_set_budget(b, 16, 0.0), CsCode::Ok);
+    }
+    for (i, q) in rows.iter().enumerate() {
+        let ra = solve(a, q);
+        assert_eq!(ra, solve(b, q), "row {i}");
+        assert_eq!(ra.0, 0, "row {i} within 16 evaluations");
+        if i == 10 {
+            // SAFETY: live handle.
+            assert_eq!(unsafe { cs_tendons_set_budget(b, 1, 0.0) }, CsCode::Ok);
+            assert_eq!(solve(b, &bad).0, 6, "budget_exhausted");
+            // SAFETY: live handle.
+            assert_eq!(unsafe { cs_tendons_set_budget(b, 16, 0.0) }, CsCode::Ok);
+        }
+    }
+    // SAFETY: live handle; cs_last_error is never null.
+    unsafe {
+        assert_eq!(cs_tendons_set_budget(a, 0, -1.0), CsCode::BadArgument);
+        let msg = std::ffi::CStr::from_ptr(cs_last_error()).to_string_lossy();
+        assert!(msg.contains("time_budget_s"), "{msg}");
+        assert_eq!(
+            cs_tendons_set_budget(std::ptr::null_mut(), 1, 0.0),
+            CsCode::BadArgument
+        );
+        // no limit again: the unreachable row runs to its own end (not 6)
+        assert_eq!(cs_tendons_set_budget(a, 0, 0.0), CsCode::Ok);
+        cs_tendons_free(a);
+        cs_tendons_free(b);
+    }
+}
+
 /// The same from a C program (skipped when no C compiler is found).
 #[test]
 fn c_program_sees_bit_identical_rows() {

@@ -162,6 +162,32 @@ impl TendonSolver {
         PyArray1::from_slice(py, self.ws.rest_free_lengths())
     }
 
+    /// Budget of every later solve (the scene's `numerics.tendons.max_passes` and
+    /// `time_budget_s`): at most `max_passes` rod evaluations and `time_budget_s`
+    /// seconds of wall time per row (None: no limit, the default). A row that runs
+    /// out ends with report status `"budget_exhausted"` at about the budget
+    /// (overshoot: one evaluation, or one Jacobian sweep and the evaluation after
+    /// it) and is rolled back like any row that does not converge; a budgeted row
+    /// does not run the nested fallback (docs/control-loop-budget.md). A bad value
+    /// (0 passes, more than 100 000, a time that is not positive) raises
+    /// `SceneError` naming the field and changes nothing.
+    #[pyo3(signature = (max_passes = None, time_budget_s = None))]
+    fn set_budget(
+        &mut self,
+        py: Python<'_>,
+        max_passes: Option<usize>,
+        time_budget_s: Option<f64>,
+    ) -> PyResult<()> {
+        let settings = cablesense::tendons::TendonSettings {
+            max_passes,
+            time_budget_s,
+            ..*self.ws.tendon_settings()
+        };
+        self.ws
+            .set_tendon_settings(settings)
+            .map_err(|e| from_model_error(py, e))
+    }
+
     /// Solve one row: `readings` (m, one per driven tendon, in `columns` order; a
     /// sequence or a 1-D float array). Warm from the previous solve unless
     /// `warm=False`. Returns {tip (3,), section_tips (k, 3), tensions (p,) N,

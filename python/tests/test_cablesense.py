@@ -315,6 +315,31 @@ def test_failed_row_is_rolled_back():
             assert not stream.solve_line(i, bad_line)["report"]["converged"]
 
 
+
+def test_a_budget_limited_row_returns_budget_exhausted():
+    # a budget per call (`set_budget`): one rod evaluation ends the unreachable row
+    # with its own status, the rows after it are bit-identical to a solver without
+    # it, and 16 evaluations let the val rows converge (docs/control-loop-budget.md)
+    scene = cablesense.Scene.from_file(FTDCR)
+    _, Q = val_readings(scene)
+    bad = [0.05] + [0.0] * 8
+    a, b = cablesense.TendonSolver(scene), cablesense.TendonSolver(scene)
+    a.set_budget(max_passes=16)
+    b.set_budget(max_passes=16)
+    for i, q in enumerate(Q[:40]):
+        ra, rb = a.solve(q), b.solve(q)
+        assert ra["report"]["converged"], i
+        assert np.array_equal(ra["tip"], rb["tip"]), i
+        if i == 10:
+            b.set_budget(max_passes=1)
+            assert b.solve(bad)["report"]["status"] == "budget_exhausted"
+            b.set_budget(max_passes=16)
+    with pytest.raises(cablesense.SceneError) as e:
+        a.set_budget(time_budget_s=-1.0)
+    assert "time_budget_s" in str(e.value)
+    a.set_budget()  # no limit again
+    assert a.solve(bad)["report"]["status"] != "budget_exhausted"
+
 # --- calibration -----------------------------------------------------------------
 
 CAL = DATA / "calibration"

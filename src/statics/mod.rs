@@ -54,6 +54,14 @@ pub enum SolveStatus {
     /// shape the robot takes. Checked for cold solves under world-fixed loads without
     /// tensioned cables (where `n(0)` is in closed form); do not use the shape.
     Unstable,
+    /// The call's budget ended it before convergence (tendon solves from readings:
+    /// [`crate::settings::TendonSettings::max_passes`] or `time_budget_s` ran out,
+    /// or the joint paths handed back and the nested fallback, which a budgeted
+    /// call does not run, was all that was left): the last iterate, not an
+    /// equilibrium; do not use the shape. With the rollback on
+    /// ([`crate::tendons::TendonWorkspace::set_rollback`]) the next solve starts as
+    /// if this one had not run.
+    BudgetExhausted,
 }
 
 impl SolveStatus {

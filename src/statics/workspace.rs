@@ -395,14 +395,45 @@ impl crate::math::warm::WarmCopy for Workspace {
         crate::math::warm::warm_fields!(self, src, copy: [
             x, x_trial, x_best, best_res, x_ok, x_prev, x_start, x_first, first_taken, x_tan,
             tip_ok, tip_tan, tip_start, tip_first, last_intensity, tol, noise, branch_verdict,
-            dx, res, lu, broyden, use_broyden, secant, holes_aux, b64, b3, b6, wide, b_arc,
+            dx, res, lu, broyden, use_broyden, secant, holes_aux, wide,
             last_pass, has_solution, sens_s, sens_m, sens_col, dxdtheta, dxdtheta_valid,
             lu_valid, tip, report, jac_evals, multi, multi_active,
-        ], keep: [robot, loads, settings, plan, multi_supported]);
+        ], keep: [robot, loads, settings, plan, multi_supported, b64, b3, b6, b_arc]);
+        // the pass buffers: whole under the condensed coupling (its next holes and
+        // matrices are carried from pass to pass), else what a later pass reads
+        // (`PassBuf::warm_copy_uncondensed`)
+        if self.plan.condensed || src.plan.condensed {
+            crate::math::warm::WarmCopy::warm_copy_from(&mut self.b64, &src.b64);
+            crate::math::warm::WarmCopy::warm_copy_from(&mut self.b3, &src.b3);
+            crate::math::warm::WarmCopy::warm_copy_from(&mut self.b6, &src.b6);
+            crate::math::warm::WarmCopy::warm_copy_from(&mut self.b_arc, &src.b_arc);
+        } else {
+            self.b64.warm_copy_uncondensed(&src.b64, true);
+            self.b3.warm_copy_uncondensed(&src.b3, false);
+            self.b6.warm_copy_uncondensed(&src.b6, false);
+            if let (Some(a), Some(b)) = (self.b_arc.as_mut(), src.b_arc.as_ref()) {
+                a.warm_copy_uncondensed(b, false);
+            }
+        }
         // the plan is configuration but for the friction's capstan factors per
         // chord, which a tendon solve updates (`set_chord_factors`)
         for (a, b) in self.plan.cables.iter_mut().zip(&src.plan.cables) {
             crate::math::warm::WarmCopy::warm_copy_from(&mut a.factor, &b.factor);
+        }
+    }
+}
+
+impl Workspace {
+    /// Debug builds, after a rollback: the pass buffers' state the rollback does
+    /// not copy set to NaN ([`crate::statics::pass::PassBuf::poison_uncopied`]).
+    pub(crate) fn poison_uncopied(&mut self) {
+        if !self.plan.condensed {
+            self.b64.poison_uncopied(true);
+            self.b3.poison_uncopied(false);
+            self.b6.poison_uncopied(false);
+            if let Some(b) = self.b_arc.as_mut() {
+                b.poison_uncopied(false);
+            }
         }
     }
 }

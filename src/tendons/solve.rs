@@ -56,6 +56,8 @@ mod nested;
 mod loads;
 // Why a row did not converge, with the tendons named by their readings columns.
 mod diagnose;
+// The budget of one call (`TendonSettings::max_passes`, `time_budget_s`).
+mod budget;
 
 /// Outcome of one solve from readings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -128,6 +130,8 @@ pub struct TendonWorkspace {
     joint: joint::JointBufs,
     /// The warm state to return to after a solve that did not converge.
     rollback: Rollback,
+    /// The current call's budget ([`TendonSettings::max_passes`], `time_budget_s`).
+    budget: budget::Budget,
 }
 
 crate::math::warm::warm_by_copy!(TendonReport);
@@ -152,7 +156,9 @@ impl crate::math::warm::WarmCopy for TendonWorkspace {
         crate::math::warm::warm_fields!(self, src, copy: [
             ws, free, t, t_trial, taut, taut_before, g, step, theta, sens, lengths, lu,
             sens_fresh, sign, last_q, factors, mean_factor, has_solution, report, joint,
-        ], keep: [driven, mech, columns, free0, geo, n_extra, mu, friction, x_ref, rollback]);
+        ], keep: [
+            driven, mech, columns, free0, geo, n_extra, mu, friction, x_ref, rollback, budget,
+        ]);
     }
 }
 
@@ -281,6 +287,7 @@ impl TendonWorkspace {
                 good: None,
                 pending: false,
             },
+            budget: budget::Budget::default(),
         };
         me.reference()?;
         // the rollback's copy: allocated once here, refreshed without allocating
@@ -462,9 +469,11 @@ impl TendonWorkspace {
     /// [`TendonWorkspace::tip_position`], [`TendonWorkspace::tensions`],
     /// [`TendonWorkspace::diagnose`], `workspace_mut().solution()`) until the next
     /// solve, `set_extra`, `set_tendon_settings` or [`TendonWorkspace::apply_rollback`],
-    /// which first restore the kept state. The cost is one copy of the workspace's fixed-size state per solve
-    /// (no allocation). Off: the next solve starts from wherever the failed one
-    /// stopped (what a caller with its own policy, e.g. an estimator's inner
+    /// which first restore the kept state. The cost is one copy per solve of the
+    /// state a later solve reads (no allocation; the pass buffers' scratch is not
+    /// copied: `PassBuf::warm_copy_uncondensed`), about 1 % of a warm FTDCR v4
+    /// row. Off: the next solve starts from wherever the failed one stopped (what a
+    /// caller with its own policy, e.g. an estimator's inner
     /// iterations, wants). Turning it off drops a pending rollback.
     /// (Turning it on allocates the kept copy, off frees it.)
     pub fn set_rollback(&mut self, on: bool) {
@@ -506,6 +515,11 @@ impl TendonWorkspace {
         if let Some(good) = self.rollback.good.take() {
             WarmCopy::warm_copy_from(self, &*good);
             self.rollback.good = Some(good);
+            // what the copy leaves out is not read before it is written again:
+            // debug builds check it (NaN there would reach the results)
+            if cfg!(debug_assertions) {
+                self.ws.poison_uncopied();
+            }
         }
     }
 
@@ -544,6 +558,7 @@ impl TendonWorkspace {
     /// The solve of checked readings.
     fn solve_checked(&mut self, readings_m: &[f64], start: Start) -> TendonReport {
         let p = self.driven.len();
+        self.budget_begin();
         // the free lengths the current point belongs to (joint path's continuation)
         self.joint.free_prev.copy_from_slice(&self.free);
         for (i, reading) in readings_m.iter().enumerate() {
@@ -587,7 +602,10 @@ impl TendonWorkspace {
             self.joint.at_solution = true;
             return self.finish();
         }
-        self.joint.at_solution = false;
+        self.joint_failed();
+        if self.budget.spent {
+            return self.finish();
+        }
         // a cold start takes the same path from the reference equilibrium (zero
         // readings, the pretensions: solved once at construction, so the start does
         // not depend on earlier rows), continued in the readings by `solve_joint`'s
@@ -595,8 +613,15 @@ impl TendonWorkspace {
         // the straight rod follows. Why: on the FTDCR v4 val rows the nested cold
         // solve costs ~1e5 `f64` right-hand sides a row (its shooting continuation
         // and branch checks at every tension iterate), the path from the reference
-        // a few thousand.
-        if start == Start::Cold && self.tendon_settings().joint_newton && !self.x_ref.is_empty() {
+        // a few thousand. Under a budget a warm row that the joint path did not
+        // reach takes this path too, with what is left of the budget (`budget`
+        // module docs: a row cut short is rolled back, and the rows after it
+        // then start a step farther away).
+        let from_ref = start == Start::Cold || self.budget.limited;
+        if from_ref && self.tendon_settings().joint_newton && !self.x_ref.is_empty() {
+            if start == Start::Warm {
+                self.budget_second_chance();
+            }
             self.joint.free_prev.copy_from_slice(&self.free0);
             self.ws.adopt_unknowns(&self.x_ref, false);
             self.joint.forget_jacobian();
@@ -605,9 +630,24 @@ impl TendonWorkspace {
                 self.joint.at_solution = true;
                 return self.finish();
             }
-            self.joint.at_solution = false;
+            self.joint_failed();
+        }
+        if self.budget_ends_call() {
+            return self.finish();
         }
         self.solve_nested(start)
+    }
+
+    /// The joint path did not reach the row: whatever status a step of it left
+    /// (an intermediate continuation step or a friction round ends `Converged` at
+    /// its own, looser target) is not the row's. Without this a budgeted call that
+    /// stopped after such a step reported `converged` at a point that is not an
+    /// equilibrium, kept it as warm state and started the next rows from there
+    /// (FTDCR v4 val line 72 under `max_passes = 16`: the 60 rows after it ended
+    /// `budget_exhausted`).
+    fn joint_failed(&mut self) {
+        self.joint.at_solution = false;
+        self.report.status = SolveStatus::MaxIterations;
     }
 
     /// The joint path, then the capstan factors of its shape; while they move, the
@@ -627,6 +667,9 @@ impl TendonWorkspace {
     }
 
     fn finish(&mut self) -> TendonReport {
+        if self.budget.spent && !self.report.status.is_converged() {
+            self.report.status = SolveStatus::BudgetExhausted;
+        }
         if self.report.status.is_converged() {
             self.joint
                 .push_history(self.ws.unknowns_vector(), &self.t, &self.free);

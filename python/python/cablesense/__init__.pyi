@@ -117,6 +117,12 @@ class TendonSolver:
     @property
     def rest_free_lengths(self) -> npt.NDArray[np.float64]:
         """Free length ``L0`` of each driven tendon at reading 0 (m)."""
+    def set_budget(
+        self, max_passes: Optional[int] = None, time_budget_s: Optional[float] = None
+    ) -> None:
+        """Budget of every later solve: rod evaluations and wall time (s) per row
+        (None: no limit). A row that runs out has report status
+        ``"budget_exhausted"`` and is rolled back like any failed row."""
     def solve(
         self,
         readings: Union[Sequence[float], npt.NDArray[np.float64]],

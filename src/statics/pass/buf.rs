@@ -276,3 +276,74 @@ impl<T: Real + crate::math::warm::WarmCopy> crate::math::warm::WarmCopy for Pass
         ], keep: [holes]);
     }
 }
+
+impl<T: Real + crate::math::warm::WarmCopy> PassBuf<T> {
+    /// The rollback's copy of a buffer under a coupling that is not `condensed`
+    /// (`Workspace`'s `WarmCopy`): what a later pass or sweep reads of it. The
+    /// condensed coupling's carried state (next holes, their anchors and
+    /// predictors, the segments' matrices, the settle's Broyden terms) is never read
+    /// then (`plan.condensed` guards every use), and neither is a dual buffer's
+    /// scratch: a sweep seeds `x`, and a pass writes its residual, holes, lengths
+    /// and arc-coupling terms before it reads them. Left out, those were most of the
+    /// copy (three dual buffers of `Dual<3>`, `Dual<6>` and `Dual<15>`, ~30 KB of
+    /// ~45 KB on the FTDCR v4 scene). Copied: the load parameters (a sweep reads
+    /// their values), the counters, and for the `f64` buffer (`solution`) the
+    /// evaluated point, its residual, holes and lengths, which the accessors read
+    /// after a rollback.
+    pub(crate) fn warm_copy_uncondensed(&mut self, src: &Self, solution: bool) {
+        use crate::math::warm::WarmCopy;
+        if solution {
+            crate::math::warm::warm_fields!(self, src, copy: [
+                x, theta, res, holes, lengths, rhs_evals, retries, local_tol,
+            ], keep: [
+                lengths_ck, arc_t, arc_act, arc_corr, arc_corr_g, next, mlin, mlin_terms,
+                mlin_valid, seg_map, seg_map_valid, jump_b, settle_u, settle_v, settle_n,
+                settle_tmp, prev_err, prev_step, anchor, dnext, dnext_valid, z_anchor, dz,
+                sweep_c0, sweep_w, lin, watch, conjugate_at,
+            ]);
+        } else {
+            self.theta.warm_copy_from(&src.theta);
+            self.rhs_evals = src.rhs_evals;
+            self.retries = src.retries;
+        }
+    }
+
+    /// Debug builds: fill what [`PassBuf::warm_copy_uncondensed`] leaves out with
+    /// NaN after a rollback, so that a test whose results depend on it fails (the
+    /// bit-identical rows of `tests/rollback.rs`).
+    pub(crate) fn poison_uncopied(&mut self, solution: bool) {
+        let nan = T::cst(f64::NAN);
+        let v = Vector3::new(nan, nan, nan);
+        let v64 = Vector3::repeat(f64::NAN);
+        if !solution {
+            self.x.fill(nan);
+            self.res.fill(nan);
+            self.holes.iter_mut().for_each(|h| h.fill(v));
+            self.lengths.fill(nan);
+        }
+        self.lengths_ck.fill(nan);
+        self.arc_t.fill(nan);
+        self.arc_act.fill(nan);
+        self.arc_corr = [(v, v); 2];
+        self.next.iter_mut().for_each(|h| h.fill(v64));
+        self.mlin.iter_mut().for_each(|m| m.fill(f64::NAN));
+        self.seg_map.iter_mut().for_each(|m| m.fill(f64::NAN));
+        self.dnext.iter_mut().for_each(|m| m.fill(f64::NAN));
+        self.z_anchor.iter_mut().for_each(|m| m.fill(f64::NAN));
+        for v in [
+            &mut self.jump_b,
+            &mut self.settle_u,
+            &mut self.settle_v,
+            &mut self.settle_tmp,
+            &mut self.prev_err,
+            &mut self.prev_step,
+            &mut self.dz,
+            &mut self.lin,
+        ] {
+            v.fill(f64::NAN);
+        }
+        self.anchor
+            .iter_mut()
+            .for_each(|a| *a = (v64, Matrix3::repeat(f64::NAN)));
+    }
+}

@@ -294,7 +294,7 @@ impl JointBufs {
             sw_taut: vec![true; p],
             sw_dz: vec![0.0; n + p],
             sw_f: vec![0.0; n + p],
-            rj: reference::RefJacobian::default(),
+            rj: reference::RefJacobian::new(n, np, cables),
             kept: keep::Kept::new(n + p, p, cables),
             cold: true,
         }
@@ -348,6 +348,9 @@ impl TendonWorkspace {
                 Err(first) => first,
             },
         };
+        if self.budget_skips_continuation() {
+            return self.joint_hand_back();
+        }
         // continuation, when the first fresh step says how far the row is (from the
         // free lengths of the starting point: the previous row's); failing that, a
         // second one with a larger step limit; then the nested method
@@ -588,6 +591,9 @@ impl TendonWorkspace {
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
     /// `max(|r|/tol, |G|/tol_G)` (converged at <= 1), `None` if the pass failed.
     fn joint_evaluate(&mut self) -> Option<f64> {
+        if !self.within_budget() {
+            return None;
+        }
         self.ref_leave();
         let p = self.driven.len();
         self.theta[..p].copy_from_slice(&self.t);
@@ -610,6 +616,11 @@ impl TendonWorkspace {
 
     /// Restore the row's starting point for the nested method; `false`.
     fn joint_hand_back(&mut self) -> bool {
+        if self.budget.limited {
+            // no nested method under a budget: the cold path or the end of the call
+            // follows (`budget` module), which sets its own point
+            return false;
+        }
         self.joint_inner_tolerance(0.0);
         self.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);

@@ -116,6 +116,9 @@ impl TendonWorkspace {
             self.report.status = SolveStatus::MaxIterations;
             return false;
         }
+        if !self.within_budget() {
+            return false;
+        }
         self.theta[..p].copy_from_slice(&self.t);
         // first-order predictor of the shooting unknowns from the last sweep
         self.ws.set_theta_predicted(&self.theta);

@@ -43,6 +43,24 @@ pub(in crate::tendons::solve) struct RefJacobian {
     at_ref: Option<bool>,
 }
 
+impl RefJacobian {
+    /// Buffers sized once for `n` shooting unknowns, `np` load parameters and
+    /// `cables` cables, holding no Jacobian yet. Why sized here: a budgeted warm
+    /// call may take the cold path (`budget` module) and keep its sweep here; a
+    /// buffer first filled then would allocate, and again after every rollback
+    /// to a state that never held one.
+    pub(in crate::tendons::solve) fn new(n: usize, np: usize, cables: usize) -> Self {
+        Self {
+            jac_s: vec![0.0; n * (n + np)],
+            jac_m: vec![0.0; cables * (n + np)],
+            res: vec![0.0; n],
+            lengths: vec![0.0; cables],
+            theta: vec![0.0; np],
+            ..Self::default()
+        }
+    }
+}
+
 impl TendonWorkspace {
     /// After the first evaluation of a cold start (at `x_ref`): does the kept
     /// Jacobian belong to this model?

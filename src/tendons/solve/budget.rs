@@ -1,0 +1,93 @@
+//! The budget of one solve call ([`TendonSettings::max_passes`],
+//! [`TendonSettings::time_budget_s`]): where the call stands against it, and what a
+//! budgeted call does when the warm joint path does not reach its row.
+//!
+//! Policy. A budgeted call runs the joint path only (no nested fallback: one nested
+//! shooting solve cannot be interrupted by the checks and costs ~10 ms on the FTDCR
+//! v4 robot). When the warm joint path hands back, the call spends what is left of
+//! its budget on the cold joint path from the reference equilibrium (`x_ref`, the
+//! tensions at the pretensions: what `Start::Cold` runs). Why: a row cut short is
+//! rolled back, so the next row starts from the last converged one, a step farther
+//! away, and the warm path from there needs more passes still; the cold path's cost
+//! does not depend on how far the last converged row is. The call stays a function
+//! of the warm state and the readings only, so the rollback's guarantee holds: the
+//! rows after a failed one are bit-identical to a stream without it.
+//!
+//! [`TendonSettings::max_passes`]: crate::settings::TendonSettings::max_passes
+//! [`TendonSettings::time_budget_s`]: crate::settings::TendonSettings::time_budget_s
+
+use super::TendonWorkspace;
+use std::time::{Duration, Instant};
+
+/// Where the current call stands against its budget (set at the start of every
+/// solve: not warm state).
+#[derive(Clone, Copy, Default)]
+pub(super) struct Budget {
+    /// A budget is set (`max_passes` or `time_budget_s`).
+    pub(super) limited: bool,
+    /// `time_budget_s` after the call's start.
+    deadline: Option<Instant>,
+    /// The budget ran out: every later evaluation of this call is refused.
+    pub(super) spent: bool,
+}
+
+impl TendonWorkspace {
+    /// Start the call's budget.
+    pub(super) fn budget_begin(&mut self) {
+        let s = self.tendon_settings();
+        self.budget = Budget {
+            limited: s.max_passes.is_some() || s.time_budget_s.is_some(),
+            deadline: s
+                .time_budget_s
+                .map(|t| Instant::now() + Duration::from_secs_f64(t)),
+            spent: false,
+        };
+    }
+
+    /// Under a budget the warm joint path is the row's predictor and Newton from
+    /// the last converged row only: when they do not reach the row, the cold path
+    /// follows at once instead of the warm continuation in the readings (module
+    /// docs).
+    pub(super) fn budget_skips_continuation(&self) -> bool {
+        self.budget.limited && !self.joint.cold
+    }
+
+    /// The warm joint path handed back within the budget: the cold path from the
+    /// reference gets the rest (module docs). Sets the tensions to the pretensions.
+    pub(super) fn budget_second_chance(&mut self) {
+        for i in 0..self.driven.len() {
+            self.t[i] = self.mech[i].pretension_n;
+        }
+        self.joint.cold = true;
+    }
+
+    /// May this call run one more rod evaluation? `false` once its budget
+    /// ([`TendonSettings::max_passes`], `time_budget_s`) is spent; the call then
+    /// ends with [`SolveStatus::BudgetExhausted`] (`finish`). No allocation.
+    ///
+    /// [`TendonSettings::max_passes`]: crate::settings::TendonSettings::max_passes
+    /// [`SolveStatus::BudgetExhausted`]: crate::statics::SolveStatus::BudgetExhausted
+    pub(super) fn within_budget(&mut self) -> bool {
+        if self.budget.spent {
+            return false;
+        }
+        let passes = self.report.forward_solves;
+        let spent = self
+            .tendon_settings()
+            .max_passes
+            .is_some_and(|m| passes >= m)
+            || self.budget.deadline.is_some_and(|d| Instant::now() >= d);
+        self.budget.spent = spent;
+        !spent
+    }
+
+    /// After the joint paths did not converge: does the budget end the call here?
+    /// It does whenever a budget is set: a budgeted call does not run the nested
+    /// fallback (module docs). The call then ends with `BudgetExhausted`.
+    pub(super) fn budget_ends_call(&mut self) -> bool {
+        if self.budget.limited {
+            self.budget.spent = true;
+        }
+        self.budget.spent
+    }
+}
