@@ -56,6 +56,7 @@ mod reach_follower;
 mod repro_reliability;
 mod rollback;
 mod scene_errors;
+mod scene_limits;
 mod settings_matrix;
 mod soak_faults;
 mod soft_arm;
