@@ -46,6 +46,7 @@ mod forward_closed_form;
 mod forward_invariants;
 mod forward_jacobian;
 mod hardware_ftdcr;
+mod ik;
 mod ladder;
 mod ladder_displacement;
 mod measuring_cables;
