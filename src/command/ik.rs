@@ -275,6 +275,8 @@ pub struct IkReport {
     pub iterations: usize,
     /// Forward solves (trial steps, friction differences).
     pub forward_solves: usize,
+    /// Bounded least-squares steps solved (clarabel).
+    pub qp_solves: usize,
     /// The secondary objective that chose among the solutions.
     pub objective: IkObjective,
     /// Tendons slack at the returned readings.
@@ -924,6 +926,7 @@ impl IkWorkspace {
         let mut solves = 0usize;
         let mut iterations = 0usize;
         let mut stalls = 0usize;
+        let mut qp_solves = 0usize;
         let mut phi = self.merit(target, &self.tip, &self.axis, &self.q, &self.t);
         let status = loop {
             let reached = self.is_reached(target);
@@ -944,6 +947,7 @@ impl IkWorkspace {
                 self.build_qp(target, delta);
                 let mut u = std::mem::take(&mut self.u);
                 let ok = self.qp.solve(&mut u);
+                qp_solves += 1;
                 self.u = u;
                 if !ok {
                     outcome = Some(Some(self.final_status(reached, false)));
@@ -1037,6 +1041,7 @@ impl IkWorkspace {
             }),
             iterations,
             forward_solves: solves,
+            qp_solves,
             objective: st.objective,
             slack: self.best.taut().iter().filter(|t| !**t).count(),
         })
