@@ -52,6 +52,7 @@ mod ladder_displacement;
 mod measuring_cables;
 mod reach_3d;
 mod reach_cables;
+mod reach_cli;
 mod reach_elastica;
 mod reach_follower;
 mod repro_reliability;

@@ -9,6 +9,7 @@ mod output;
 mod pareto;
 mod plot_track;
 mod progress;
+mod reach;
 mod readings;
 mod solve;
 mod stability;
@@ -50,6 +51,9 @@ enum Command {
     Stability(stability::Args),
     /// The shipped scenes and data embedded in this binary: list them or copy them out.
     Demo(demo::Args),
+    /// Servo readings that put the tip at each target (inverse kinematics), as a
+    /// readings file for `solve --readings`.
+    Reach(reach::Args),
 }
 
 /// The command line with negative numbers taken as values in every subcommand
@@ -85,6 +89,7 @@ fn main() -> std::process::ExitCode {
         Command::Pareto(a) => pareto::run(a),
         Command::Stability(a) => stability::run(a),
         Command::Demo(a) => demo::run(a),
+        Command::Reach(a) => reach::run(a),
     }));
     let result = match result {
         Ok(r) => r,
