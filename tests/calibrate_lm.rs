@@ -156,6 +156,45 @@ fn lm_matches_normal_equations_and_respects_an_active_bound() {
     assert!((res.z[0] - exact[0]).abs() < 1e-9, "{:?}", res.z);
 }
 
+/// The line fit with a Jacobian of the wrong sign: every trial goes uphill and is
+/// rejected, the damping grows until the steps vanish. That is not a minimum: the
+/// status is `Stalled`, not `Converged` (the residual still correlates with a
+/// column: `gradient_cosine` near 1, far above `STATIONARY_COSINE`), and the
+/// values are the start's.
+struct WrongSign(Linear);
+
+impl LeastSquares for WrongSign {
+    type Error = String;
+    fn unknowns(&self) -> usize {
+        self.0.unknowns()
+    }
+    fn residual_count(&self) -> usize {
+        self.0.residual_count()
+    }
+    fn residuals(&mut self, z: &[f64], out: &mut [f64]) -> Result<(), String> {
+        self.0.residuals(z, out)
+    }
+    fn jacobian(&mut self, _z: &[f64], _r: &[f64], jac: &mut DMatrix<f64>) -> Result<(), String> {
+        jac.copy_from(&(-&self.0.x));
+        Ok(())
+    }
+}
+
+#[test]
+fn a_fit_whose_steps_vanish_away_from_a_minimum_is_not_converged() {
+    let mut p = WrongSign(line_data());
+    let res = levenberg_marquardt(
+        &mut p,
+        &[0.0, 0.0],
+        &Bounds::none(2),
+        &LmSettings::default(),
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(res.status, LmStatus::Stalled, "{res:?}");
+    assert_eq!(res.z, [0.0, 0.0]);
+}
+
 #[test]
 fn huber_loss_resists_an_outlier() {
     let mut p = line_data();

@@ -23,6 +23,7 @@ mod calibrate_conditioning;
 mod calibrate_crossval;
 mod calibrate_exact_sensitivities;
 mod calibrate_failed_rows;
+mod calibrate_friction;
 mod calibrate_identifiability;
 mod calibrate_identify;
 mod calibrate_jacobian;

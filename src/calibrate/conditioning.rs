@@ -82,19 +82,26 @@ pub struct InputTimeline {
     file: String,
     /// Name of the time column (looked for, if absent), for errors.
     time_column: String,
-    /// Time stamp per row (s), if the recording has a time column.
+    /// Time stamp per row (s), if the recording has a time column; in time order.
     t: Option<Vec<f64>>,
-    /// Inputs per row (recording units), row-major.
+    /// Inputs per row (recording units), row-major, in time order.
     inputs: Vec<f64>,
     width: usize,
-    /// Per row: first row of its block, and one past its last.
+    /// Per row in time order: first row of its block, and one past its last.
     block: Vec<(usize, usize)>,
+    /// Position in time order of each row of the file (`None`: the file's order
+    /// is the time order, or there are no time stamps).
+    rank: Option<Vec<usize>>,
 }
 
 impl InputTimeline {
     /// A timeline of `inputs` (one `Vec` per row, all the same length), stamped
     /// `t` when given (one per row).
-    /// `time_column` names the time column in errors.
+    /// `time_column` names the time column in errors. With time stamps, the rows
+    /// are taken in time order whatever their order in the file (a stable sort:
+    /// rows with equal stamps keep their file order), so a shuffled copy of a
+    /// recording is conditioned exactly as the original; results come back in
+    /// file order.
     pub fn new(
         file: impl Into<String>,
         time_column: impl Into<String>,
@@ -103,6 +110,23 @@ impl InputTimeline {
     ) -> Self {
         let n = inputs.len();
         let width = inputs.first().map_or(0, Vec::len);
+        let mut rank = None;
+        let mut sorted_inputs: Option<Vec<Vec<f64>>> = None;
+        let t = t.map(|t| {
+            let mut order: Vec<usize> = (0..t.len()).collect();
+            order.sort_by(|&a, &b| t[a].total_cmp(&t[b]));
+            if order.iter().enumerate().all(|(k, &i)| k == i) {
+                return t;
+            }
+            let mut r = vec![0; t.len()];
+            for (k, &i) in order.iter().enumerate() {
+                r[i] = k;
+            }
+            rank = Some(r);
+            sorted_inputs = Some(order.iter().map(|&i| inputs[i].clone()).collect());
+            order.iter().map(|&i| t[i]).collect()
+        });
+        let inputs = sorted_inputs.as_deref().unwrap_or(inputs);
         let mut block = vec![(0, n); n];
         if let Some(t) = &t {
             let mut start = 0;
@@ -120,6 +144,7 @@ impl InputTimeline {
             inputs: inputs.iter().flatten().copied().collect(),
             width,
             block,
+            rank,
         }
     }
 
@@ -204,7 +229,14 @@ impl InputTimeline {
                 }
             }
         }
-        Ok(out)
+        // back to the file's order
+        Ok(match &self.rank {
+            Some(rank) => rank
+                .iter()
+                .flat_map(|&k| out[k * m..(k + 1) * m].iter().copied())
+                .collect(),
+            None => out,
+        })
     }
 }
 
@@ -325,6 +357,37 @@ mod tests {
             .conditioned(&cond, &[0], 1.0)
             .unwrap_err();
         assert!(e.to_string().contains("`stamp`"), "{e}");
+    }
+
+    #[test]
+    fn a_shuffled_recording_is_conditioned_as_the_original() {
+        let (t, x) = rows();
+        // a fixed permutation of the rows (file order no longer time order)
+        let perm: Vec<usize> = (0..t.len()).map(|k| (k * 5 + 3) % t.len()).collect();
+        let mut seen = perm.clone();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..t.len()).collect::<Vec<_>>());
+        let ts: Vec<f64> = perm.iter().map(|&i| t[i]).collect();
+        let xs: Vec<Vec<f64>> = perm.iter().map(|&i| x[i].clone()).collect();
+        for (dt, b) in [(0.0, 0.0), (0.2, 0.0), (0.3, 0.5), (0.0, 0.8), (-0.3, 0.2)] {
+            let cond = Conditioning {
+                time_offset_s: dt,
+                backlash_m: b,
+            };
+            let orig = InputTimeline::new("f", "t_s", Some(t.clone()), &x)
+                .conditioned(&cond, &[0, 1], 1.0)
+                .unwrap();
+            let shuf = InputTimeline::new("f", "t_s", Some(ts.clone()), &xs)
+                .conditioned(&cond, &[0, 1], 1.0)
+                .unwrap();
+            for (k, &i) in perm.iter().enumerate() {
+                assert_eq!(
+                    shuf[2 * k..2 * k + 2],
+                    orig[2 * i..2 * i + 2],
+                    "dt {dt} b {b} row {i}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -20,7 +20,10 @@ use super::model::CalibrationModel;
 use super::recording::Recording;
 use super::run::{calibrate, CalibrationSetup};
 use super::stats::TipErrors;
+use super::uncertainty::{fit_model_error, lateral_deflection};
 use super::CalibrationError;
+use crate::scene::ModelErrorSpec;
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Groups of a recording's rows: `group_of[i]` indexes `names` for row `i`.
@@ -137,6 +140,13 @@ pub struct HeldOut {
     pub status: String,
     /// Fitted scene parameter values, in the order of the candidate's parameters.
     pub values: Vec<f64>,
+    /// Each held-out row's model marker (robot base frame, m), in file order.
+    #[serde(skip)]
+    pub model_m: Vec<Vector3<f64>>,
+    /// Each held-out row's error (model - measured, m) with the group's mean
+    /// offset removed, in file order.
+    #[serde(skip)]
+    pub error_m: Vec<Vector3<f64>>,
 }
 
 /// A candidate's cross-validation.
@@ -166,6 +176,25 @@ impl CrossValidation {
             held_out,
             pooled_rmse_m,
         }
+    }
+
+    /// The model-error term of the predictions' covariance
+    /// ([`super::uncertainty`]), fitted to every held-out row of every group, the
+    /// deflection measured from the axis through `base` along `axis` (the robot's
+    /// base). `None` without held-out rows.
+    pub fn model_error(
+        &self,
+        base: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        source: &str,
+    ) -> Option<ModelErrorSpec> {
+        let samples: Vec<(f64, Vector3<f64>)> = self
+            .held_out
+            .iter()
+            .flat_map(|h| h.model_m.iter().zip(&h.error_m))
+            .map(|(p, e)| (lateral_deflection(p, base, axis), *e))
+            .collect();
+        fit_model_error(&samples, source)
     }
 }
 
@@ -211,7 +240,18 @@ pub fn cross_validate<M: CalibrationModel + Clone>(
             .iter()
             .filter(|f| f.split == Split::Val)
             .count();
+        let val_rows: Vec<_> = report
+            .rows
+            .iter()
+            .filter(|r| r.split == Split::Val)
+            .collect();
+        let mean = val_rows
+            .iter()
+            .fold(Vector3::zeros(), |m, r| m + r.error_m())
+            / (val_rows.len().max(1) as f64);
         held_out.push(HeldOut {
+            model_m: val_rows.iter().map(|r| r.model_base_m).collect(),
+            error_m: val_rows.iter().map(|r| r.error_m() - mean).collect(),
             group: name.clone(),
             rows: held.rows.len(),
             fit_rows: fit.rows.len(),
@@ -337,6 +377,8 @@ mod tests {
                 errors,
                 status: String::new(),
                 values: vec![],
+                model_m: vec![],
+                error_m: vec![],
             }
         };
         let cv = CrossValidation::pool(vec![held(1, 3.0), held(3, 1.0)]);

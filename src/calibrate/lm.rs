@@ -130,13 +130,15 @@ impl Default for LmSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LmStatus {
-    /// Cost decrease, step or projected gradient below the tolerance: a (local)
-    /// minimum. Usable.
+    /// Cost decrease, step or projected gradient below the tolerance at a
+    /// stationary point (every free column's cosine with the residual at most
+    /// [`STATIONARY_COSINE`]): a (local) minimum. Usable.
     Converged,
     /// Iteration limit: the best point so far. Usable if its residuals are.
     MaxIterations,
-    /// No damping produced a decrease (flat or invalid neighbourhood): the best point
-    /// so far.
+    /// No damping produced a decrease (flat or invalid neighbourhood), or the steps
+    /// vanished under a growing damping away from a stationary point: the best
+    /// point so far, not a minimum.
     Stalled,
     /// Not produced by [`levenberg_marquardt`]: a calibration
     /// ([`super::calibrate`]) found more rows whose forward solve fails than its
@@ -221,6 +223,60 @@ fn weights_and_cost(r: &[f64], huber: Option<&Huber>, w: &mut [f64]) -> f64 {
         i = e;
     }
     cost + 0.5 * r[rows..].iter().map(|x| x * x).sum::<f64>()
+}
+
+/// Largest cosine between the (weighted) residual and a free unknown's Jacobian
+/// column below which a fit that stopped moving is at a stationary point
+/// (MINPACK's `gtol` test). A step or a decrease below the tolerance while a
+/// column still correlates more than this with the residual is not a minimum: the
+/// damping grew until the steps vanished (rejected trials, e.g. rows whose solve
+/// failed at the trial point, or a Jacobian that does not match the residuals).
+pub const STATIONARY_COSINE: f64 = 1e-2;
+
+/// `max_k |g_k| / sqrt(a_kk sum w r^2)` over the free unknowns (0 when nothing is
+/// left: a zero residual or no free column).
+pub fn gradient_cosine(
+    a: &DMatrix<f64>,
+    g: &DVector<f64>,
+    r: &[f64],
+    w: &[f64],
+    free: &[usize],
+) -> f64 {
+    let rr: f64 = r.iter().zip(w).map(|(r, w)| w * r * r).sum();
+    free.iter()
+        .filter(|&&k| a[(k, k)] > 0.0 && rr > 0.0)
+        .map(|&k| g[k].abs() / (a[(k, k)] * rr).sqrt())
+        .fold(0.0, f64::max)
+}
+
+/// Relative size of the undamped Gauss-Newton step (`|h| <= GN_STEP (|z| + GN_STEP)`)
+/// below which a fit that stopped moving is at a stationary point whatever the
+/// cosine: at a zero-residual optimum the residual is rounding, and its cosine with
+/// a column means nothing.
+pub const GN_STEP: f64 = 1e-4;
+
+/// The status of a fit that stopped moving: [`LmStatus::Converged`] at a
+/// stationary point (the residual orthogonal to the free columns, or an undamped
+/// Gauss-Newton step that would not move it), else [`LmStatus::Stalled`] (no false
+/// convergence).
+fn stopped(
+    a: &DMatrix<f64>,
+    g: &DVector<f64>,
+    r: &[f64],
+    w: &[f64],
+    free: &[usize],
+    z: &DVector<f64>,
+) -> LmStatus {
+    if gradient_cosine(a, g, r, w, free) <= STATIONARY_COSINE {
+        return LmStatus::Converged;
+    }
+    let nf = free.len();
+    let af = DMatrix::from_fn(nf, nf, |i, j| a[(free[i], free[j])]);
+    let gf = DVector::from_fn(nf, |i, _| -g[free[i]]);
+    match af.cholesky().map(|c| c.solve(&gf)) {
+        Some(h) if h.norm() <= GN_STEP * (z.norm() + GN_STEP) => LmStatus::Converged,
+        _ => LmStatus::Stalled,
+    }
 }
 
 /// Minimise the problem's cost from `z0` within `bounds` (see the module docs).
@@ -337,16 +393,8 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
         bounds.project(&mut z_new);
         let h = &z_new - &z;
         if h.norm() <= s.tolerance * (z.norm() + s.tolerance) {
-            return Ok(finish(
-                z,
-                LmStatus::Converged,
-                iterations,
-                evaluations,
-                cost,
-                r,
-                w,
-                jac,
-            ));
+            let status = stopped(&a, &g, &r, &w, &free, &z);
+            return Ok(finish(z, status, iterations, evaluations, cost, r, w, jac));
         }
         // predicted decrease of the local quadratic model (undamped, projected step)
         let predicted = -(g.dot(&h) + 0.5 * h.dot(&(&a * &h)));
@@ -379,16 +427,14 @@ pub fn levenberg_marquardt<P: LeastSquares + ?Sized>(
                         accepted: true,
                     });
                     if decrease <= s.tolerance * cost.max(f64::MIN_POSITIVE) {
-                        return Ok(finish(
-                            z,
-                            LmStatus::Converged,
-                            iterations,
-                            evaluations,
-                            cost,
-                            r,
-                            w,
-                            jac,
-                        ));
+                        let free: Vec<usize> = (0..n)
+                            .filter(|&k| {
+                                !((z[k] <= bounds.lower[k] && g[k] > 0.0)
+                                    || (z[k] >= bounds.upper[k] && g[k] < 0.0))
+                            })
+                            .collect();
+                        let status = stopped(&a, &g, &r, &w, &free, &z);
+                        return Ok(finish(z, status, iterations, evaluations, cost, r, w, jac));
                     }
                     true
                 } else {

@@ -36,9 +36,10 @@ mod recording;
 mod report;
 mod run;
 mod stats;
+pub mod uncertainty;
 
 pub use crate::scene::calibration::{
-    CalibrationSpec, LengthUnit, ParamSpec, TransformSpec, MIN_HUBER_SIGMA,
+    CalibrationSpec, LengthUnit, ModelErrorSpec, ParamSpec, TransformSpec, MIN_HUBER_SIGMA,
 };
 pub use cc_model::CcModel;
 pub use conditioning::{Conditioning, InputTimeline, ReadingsHistory, MAX_GAP_S};
@@ -58,8 +59,8 @@ pub use identify_assign::{
 };
 pub use jacobian::residuals_and_jacobian;
 pub use lm::{
-    central_differences, levenberg_marquardt, Bounds, Huber, LeastSquares, LmIteration, LmResult,
-    LmSettings, LmStatus,
+    central_differences, gradient_cosine, levenberg_marquardt, Bounds, Huber, LeastSquares,
+    LmIteration, LmResult, LmSettings, LmStatus, STATIONARY_COSINE,
 };
 pub use model::{finite_differences, CalibrationModel, RowFailure, Sensitivities, TensionModel};
 pub use readings_model::{ReadingsModel, SceneModel};

@@ -27,6 +27,15 @@ pub trait CalibrationModel: Send {
     /// The next [`CalibrationModel::predict`] starts cold (default: nothing to do).
     fn restart(&mut self) {}
 
+    /// A new chain of rows begins: as [`CalibrationModel::restart`], and the model
+    /// forgets the history of earlier chains (the friction's direction memory), so a
+    /// row's prediction depends only on the rows before it in its own chain; every
+    /// evaluation of a chain (the base sweep and each finite-difference sweep) then
+    /// sees the same history.
+    fn begin_chain(&mut self) {
+        self.restart();
+    }
+
     /// Pose (robot base frame, m) of the body the marker is fixed to, for `row`,
     /// warm-started from the previously predicted row.
     fn predict(&mut self, row: &RecordingRow) -> Result<Pose, CalibrationError>;
@@ -159,7 +168,7 @@ fn predict_all<M: CalibrationModel + ?Sized>(
     out: &mut [Pose],
     failed: &mut Vec<(usize, RowFailure)>,
 ) -> Result<(), CalibrationError> {
-    m.restart();
+    m.begin_chain();
     for (i, (row, o)) in rows.iter().zip(out.iter_mut()).enumerate() {
         match m.predict_retrying(row)? {
             Ok(p) => *o = p,

@@ -201,7 +201,7 @@ impl<M: CalibrationModel> Problem<'_, M> {
             work,
             &|m, rows, done| {
                 m.set_params(values)?;
-                m.restart();
+                m.begin_chain();
                 rows.iter()
                     .map(|r| {
                         let p = m.predict_retrying(r);

@@ -215,6 +215,11 @@ impl CalibrationModel for ReadingsModel {
         self.cold = true;
     }
 
+    fn begin_chain(&mut self) {
+        self.cold = true;
+        self.ws.forget_direction_memory();
+    }
+
     fn predict(&mut self, row: &RecordingRow) -> Result<Pose, CalibrationError> {
         self.conditioned_readings(row)?;
         let start = if self.cold { Start::Cold } else { Start::Warm };
@@ -322,6 +327,12 @@ impl CalibrationModel for SceneModel {
         match self {
             Self::Tension(m) => m.restart(),
             Self::Readings(m) => m.restart(),
+        }
+    }
+    fn begin_chain(&mut self) {
+        match self {
+            Self::Tension(m) => m.begin_chain(),
+            Self::Readings(m) => m.begin_chain(),
         }
     }
     fn predict(&mut self, row: &RecordingRow) -> Result<Pose, CalibrationError> {

@@ -55,6 +55,17 @@ use crate::tendons::{TendonMechanics, TendonWorkspace};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
+/// The fallback's differences are of converged solves, whose noise is the solve's
+/// tolerance (a tendon mismatch of `TendonSettings::tolerance_m`, ~1e-7 m in the
+/// shipped scenes), not rounding: with the calibration's step (`fd_step`, 1e-5 of
+/// the scale) a tip that moves ~10 mm per unit relative change moves ~1e-7 m, the
+/// size of that noise, and the central and forward differences disagreed by
+/// 50-110 % on FTDCR v4 with friction. A central difference's error is
+/// `h^2 f'''/6 + noise/h`; relative noise ~1e-5 puts its minimum near `h ~ 3e-2`;
+/// 100 times the step (1e-3 of the scale) keeps the noise term near 1 % and the
+/// step far inside the parameters' ranges.
+const SOLVE_STEP_FACTOR: f64 = 100.0;
+
 /// A converged row: its conditioned readings (m), shooting unknowns, tensions (N),
 /// taut flags and marker body pose.
 #[derive(Clone, Debug)]
@@ -143,8 +154,9 @@ impl ReadingsModel {
                 d.fetch_add(k, Ordering::Relaxed);
             }
         };
+        let solve_steps: Vec<f64> = steps.iter().map(|h| h * SOLVE_STEP_FACTOR).collect();
         if self.ws.workspace().robot().friction_mu() > 0.0 {
-            finite_differences(self, values, steps, rows, out)?;
+            finite_differences(self, values, &solve_steps, rows, out)?;
             count_all(done, rows.len());
             return Ok(());
         }
@@ -165,7 +177,7 @@ impl ReadingsModel {
             .any(|(r, q)| self.states.get(&r.line).is_none_or(|s| &s.q != q));
         let mut failed = Vec::new();
         if missing {
-            self.restart();
+            self.begin_chain();
             for (i, row) in rows.iter().enumerate() {
                 if let Err(f) = self.predict_retrying(row)? {
                     failed.push((i, f));
@@ -179,7 +191,7 @@ impl ReadingsModel {
                 d.fetch_sub(counted, Ordering::Relaxed);
             }
             self.restart();
-            finite_differences(self, values, steps, rows, out)?;
+            finite_differences(self, values, &solve_steps, rows, out)?;
             count_all(done, rows.len());
             return Ok(());
         }

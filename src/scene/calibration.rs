@@ -182,6 +182,63 @@ pub struct CalibrationSpec {
     pub capture_to_base: TransformSpec,
     /// Scene parameters to fit.
     pub params: Vec<ParamSpec>,
+    /// The model-error term of a predicted tip's covariance, estimated by
+    /// cross-validation on the training rows (`cablesense crossval`); absent: none
+    /// estimated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_error: Option<ModelErrorSpec>,
+}
+
+/// Model error of a predicted tip: an isotropic 3-D Gaussian whose standard
+/// deviation per coordinate grows with the predicted tip's lateral deflection `d`
+/// (its distance from the base axis, m): `sigma(d)^2 = sigma_m^2 + (per_deflection
+/// d)^2`. Fitted by maximum likelihood to held-out cross-validation residuals
+/// (`calibrate::uncertainty`).
+///
+/// ```toml
+/// [calibration.model_error]
+/// sigma_m = 1.2e-3          # per coordinate at zero deflection (m), >= 0
+/// per_deflection = 0.04     # growth per metre of deflection (dimensionless), >= 0
+/// rows = 1620               # held-out rows it was fitted to (information)
+/// source = "crossval: 4 groups by pattern family"   # how (information)
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelErrorSpec {
+    /// Standard deviation per coordinate at zero deflection (m).
+    pub sigma_m: f64,
+    /// Growth of the standard deviation per metre of lateral deflection.
+    pub per_deflection: f64,
+    /// Held-out rows the term was fitted to.
+    #[serde(default)]
+    pub rows: usize,
+    /// How it was estimated.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub source: String,
+}
+
+impl ModelErrorSpec {
+    /// Variance per coordinate (m^2) at lateral deflection `d` (m).
+    pub fn variance(&self, d: f64) -> f64 {
+        self.sigma_m * self.sigma_m + (self.per_deflection * d).powi(2)
+    }
+
+    /// Check the numbers (field paths start with `calibration.model_error.`).
+    pub fn validate(&self) -> Result<(), ModelError> {
+        ModelError::non_negative("calibration.model_error.sigma_m", self.sigma_m)?;
+        ModelError::non_negative(
+            "calibration.model_error.per_deflection",
+            self.per_deflection,
+        )?;
+        if self.sigma_m == 0.0 && self.per_deflection == 0.0 {
+            return Err(ModelError::Invalid {
+                field: "calibration.model_error".into(),
+                why: "sigma_m and per_deflection are both 0: a model without error has no region"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
 }
 
 impl Default for CalibrationSpec {
@@ -201,6 +258,7 @@ impl Default for CalibrationSpec {
             max_iterations: 30,
             capture_to_base: TransformSpec::default(),
             params: Vec::new(),
+            model_error: None,
         }
     }
 }
@@ -229,6 +287,9 @@ impl CalibrationSpec {
     /// Check every number (field paths start with `calibration.`).
     pub fn validate(&self) -> Result<(), ModelError> {
         ModelError::positive("calibration.capture_noise_m", self.capture_noise_m)?;
+        if let Some(m) = &self.model_error {
+            m.validate()?;
+        }
         ModelError::finite3("calibration.marker_offset_m", &self.marker_offset_m)?;
         ModelError::finite3(
             "calibration.capture_to_base.rotation_vector",

@@ -16,7 +16,7 @@ mod limits;
 pub mod param;
 pub mod readings;
 
-pub use calibration::CalibrationSpec;
+pub use calibration::{CalibrationSpec, ModelErrorSpec};
 pub use estimate::EstimateSpec;
 pub use param::{set_params, set_values, ParamError, ParamPath};
 pub use readings::ReadingsSpec;

@@ -41,6 +41,13 @@ use crate::statics::{ParamSite, SolveStatus, Start, Workspace};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+/// Joint solves per row while the capstan factors settle (the lagged friction
+/// coupling's fixed point, [`TendonWorkspace::solve_joint_settled`]); then the
+/// nested method. Each round after the first starts at the last equilibrium, so it
+/// costs one or two Newton iterations; the factors' change contracts by about
+/// `mu` times the wrap angle's sensitivity to the tension per round.
+const FRICTION_ROUNDS: usize = 12;
+
 // The warm fast path: Newton on the shooting unknowns and tensions together.
 mod joint;
 // The nested method: a converged shooting solve per tension iterate (the fallback).
@@ -390,6 +397,14 @@ impl TendonWorkspace {
     pub fn friction_direction(&self) -> &[f64] {
         &self.sign
     }
+    /// Forget the friction's direction memory: every driven tendon at rest (direction
+    /// 0) with its last reading 0, as at construction. The next solve's friction
+    /// then depends on its own readings only, not on the rows solved before.
+    pub fn forget_direction_memory(&mut self) {
+        self.sign.fill(0.0);
+        self.last_q.fill(0.0);
+    }
+
     /// Values of the extra load parameters (after the tensions).
     pub fn set_extra(&mut self, extra: &[f64]) {
         self.apply_rollback();
@@ -571,10 +586,7 @@ impl TendonWorkspace {
         };
         // the warm fast path (mu = 0, or friction factors that stay put)
         self.joint.cold = start == Start::Cold;
-        if start == Start::Warm
-            && self.tendon_settings().joint_newton
-            && self.solve_joint()
-            && self.refresh_factors()
+        if start == Start::Warm && self.tendon_settings().joint_newton && self.solve_joint_settled()
         {
             self.joint.at_solution = true;
             return self.finish();
@@ -593,13 +605,29 @@ impl TendonWorkspace {
             self.ws.adopt_unknowns(&self.x_ref, false);
             self.joint.forget_jacobian();
             self.joint.rj.pending = true;
-            if self.solve_joint() && self.refresh_factors() {
+            if self.solve_joint_settled() {
                 self.joint.at_solution = true;
                 return self.finish();
             }
             self.joint.at_solution = false;
         }
         self.solve_nested(start)
+    }
+
+    /// The joint path, then the capstan factors of its shape; while they move, the
+    /// joint path again from there: the lagged friction coupling solved as a fixed
+    /// point, at most [`FRICTION_ROUNDS`] joint solves. `true` when the last one
+    /// converged with factors that stayed put (at once without friction).
+    fn solve_joint_settled(&mut self) -> bool {
+        for _ in 0..FRICTION_ROUNDS {
+            if !self.solve_joint() {
+                return false;
+            }
+            if self.refresh_factors() {
+                return true;
+            }
+        }
+        false
     }
 
     fn finish(&mut self) -> TendonReport {

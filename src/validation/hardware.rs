@@ -289,7 +289,7 @@ pub fn hardware_benchmark(
     let mut failed_rows = Vec::new();
     let mut rows = Vec::new();
     let mut split_errors = |rec: &Recording, split: Split, stride: usize| {
-        model.restart();
+        model.begin_chain();
         let (mut predicted, mut measured) = (Vec::new(), Vec::new());
         for row in rec.rows.iter().step_by(stride.max(1)) {
             match model.predict(row) {

@@ -18,6 +18,7 @@
 //! Error metric as [`super::hardware`]: Euclidean tip distance in the robot base
 //! frame, raw and with the mean offset over the split removed ([`TipErrors`]).
 
+use crate::calibrate::uncertainty::{coverage_90, lateral_deflection, Coverage};
 use crate::calibrate::{
     calibrate, row_order, CalibrationError, CalibrationModel, CalibrationSettings,
     CalibrationSetup, CcModel, FitParam, FrameSetup, ParamSpec, ReadingsModel, Recording,
@@ -97,6 +98,11 @@ pub struct RungComparison {
     pub robot_length_m: f64,
     /// Seconds: Cosserat held-out predictions, CC fit and predictions.
     pub seconds: (f64, f64),
+    /// Held-out rows inside their 90 % region under the stored calibration's
+    /// model-error term (`[calibration.model_error]`, from cross-validation on the
+    /// train rows; errors with the split's mean offset removed, as the headline);
+    /// `None` when the scene stores no term.
+    pub coverage_90: Option<Coverage>,
 }
 
 impl RungComparison {
@@ -163,7 +169,7 @@ pub fn compare_with_cc(
     let mut model = ReadingsModel::new(scene, &[], &val.input_names, spec.marker_s_m)?;
     let mut cos: Vec<Option<Vector3<f64>>> = vec![None; val.rows.len()];
     let mut failures: HashMap<usize, String> = HashMap::new();
-    model.restart();
+    model.begin_chain();
     for i in row_order(&val.rows, order) {
         let row = &val.rows[i];
         match model.predict_retrying(row)? {
@@ -251,14 +257,33 @@ pub fn compare_with_cc(
             max: s.max,
         })
         .collect();
-    let robot_length_m = scene
+    let built = scene
         .build_robot()
         .map_err(|source| CalibrationError::Model {
             context: format!("{robot}: calibrated scene"),
             source,
-        })?
-        .length();
+        })?;
+    let robot_length_m = built.length();
+    let coverage_90 = spec.model_error.as_ref().map(|term| {
+        let n = cos_model.len().max(1) as f64;
+        let mean = cos_model
+            .iter()
+            .zip(&cos_meas)
+            .fold(Vector3::zeros(), |m, (p, q)| m + (p - q))
+            / n;
+        let axis = built.base_rotation() * Vector3::z();
+        let rows: Vec<(f64, Vector3<f64>)> = cos_model
+            .iter()
+            .zip(&cos_meas)
+            .map(|(p, q)| {
+                let d = lateral_deflection(p, built.base_position(), &axis);
+                (d, p - q - mean)
+            })
+            .collect();
+        coverage_90(term, &rows)
+    });
     Ok(RungComparison {
+        coverage_90,
         robot: robot.into(),
         val_rows: val.rows.len(),
         val_solved: cos.iter().filter(|p| p.is_some()).count(),

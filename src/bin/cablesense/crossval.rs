@@ -62,6 +62,11 @@ struct Candidate {
     settings: CalibrationSettings,
     robot_length_m: f64,
     recording: Recording,
+    /// The robot's base point and axis (for the deflection of the model-error term).
+    base: (
+        cablesense::nalgebra::Vector3<f64>,
+        cablesense::nalgebra::Vector3<f64>,
+    ),
 }
 
 fn candidate(path: &std::path::Path, a: &Args) -> anyhow::Result<Candidate> {
@@ -90,6 +95,11 @@ fn candidate(path: &std::path::Path, a: &Args) -> anyhow::Result<Candidate> {
         .map(|p| p.path.parse())
         .collect::<Result<_, _>>()?;
     let model = SceneModel::new(&scene, &paths, &recording.input_names, spec.marker_s_m)?;
+    let robot = scene.build_robot()?;
+    let base = (
+        *robot.base_position(),
+        robot.base_rotation() * cablesense::nalgebra::Vector3::z(),
+    );
     let params = FitParam::all_from_spec(&spec, model.values());
     Ok(Candidate {
         name: path
@@ -103,6 +113,7 @@ fn candidate(path: &std::path::Path, a: &Args) -> anyhow::Result<Candidate> {
         settings: CalibrationSettings::from_spec(&spec, a.threads),
         model,
         recording,
+        base,
     })
 }
 
@@ -144,6 +155,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .join(", ")
     );
     let mut results: Vec<(String, Vec<String>, CrossValidation)> = Vec::new();
+    let mut terms = Vec::new();
     for c in &candidates {
         anyhow::ensure!(
             c.recording.rows.len() == first.rows.len(),
@@ -171,14 +183,40 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 started.elapsed().as_secs_f64()
             );
         }
+        let source = format!(
+            "cablesense crossval on {} ({} groups: {})",
+            a.data
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            folds.names.len(),
+            folds.names.join(", ")
+        );
+        let term = cv.model_error(&c.base.0, &c.base.1, &source);
+        match &term {
+            Some(m) => println!(
+                "  {}: model-error term sigma(d) = sqrt(({:.3} mm)^2 + ({:.4} d)^2) per coordinate, d the lateral deflection, from {} held-out rows; for the calibrated scene:\n    [calibration.model_error]\n    sigma_m = {:.6e}\n    per_deflection = {:.6e}\n    rows = {}\n    source = \"{}\"",
+                c.name,
+                m.sigma_m * 1e3,
+                m.per_deflection,
+                m.rows,
+                m.sigma_m,
+                m.per_deflection,
+                m.rows,
+                m.source
+            ),
+            None => println!("  {}: no model-error term (no held-out rows)", c.name),
+        }
+        terms.push(term);
         results.push((c.name.clone(), c.names.clone(), cv));
     }
     print_table(&folds, &results);
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let json: Vec<serde_json::Value> = results
         .iter()
-        .map(|(name, params, cv)| {
-            serde_json::json!({ "candidate": name, "params": params, "cross_validation": cv })
+        .zip(&terms)
+        .map(|((name, params, cv), term)| {
+            serde_json::json!({ "candidate": name, "params": params, "cross_validation": cv, "model_error": term })
         })
         .collect();
     let path = a.out.join("crossval.json");

@@ -588,6 +588,16 @@ fn print_rungs(c: &cablesense::validation::RungComparison, target: f64) {
             );
         }
     };
+    match &c.coverage_90 {
+        Some(cov) => println!(
+            "  90 % regions (model-error term of the stored calibration, from cross-validation on train rows; parameter and reading terms not included): {} / {} held-out rows inside ({:.1} %; a calibrated model covers 85-95 %: {})",
+            cov.inside,
+            cov.total,
+            cov.fraction() * 100.0,
+            yes((0.85..=0.95).contains(&cov.fraction()))
+        ),
+        None => println!("  90 % regions: the stored calibration has no [calibration.model_error] term (run `cablesense crossval`)"),
+    }
     values("Cosserat fitted values (stored)", &c.cosserat_values);
     values("CC rung fitted values", &c.cc_values);
     for s in c.substituted.iter().take(5) {
