@@ -6,8 +6,13 @@
 //! are bounded least-squares problems (clarabel), with the exact Jacobian of the
 //! tip with respect to the readings (implicit function theorem, [`ik`] module docs),
 //! warm-started from the previous tick and bounded by a per-call budget.
+//! [`workspace`] samples the actuator box for the reachable tips, their convex hull
+//! and volume.
 //! Layering: this module uses `tendons`, `statics` and `robot`, never the CLI.
 
 pub mod ik;
 
 pub use ik::{IkObjective, IkReport, IkSettings, IkStatus, IkTarget, IkWorkspace};
+pub mod workspace;
+
+pub use workspace::{sample_workspace, Hull, SampleStatus, WorkspaceCloud, WorkspaceSettings};

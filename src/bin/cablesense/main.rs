@@ -17,6 +17,7 @@ mod stream;
 mod tendon_estimate;
 mod track;
 mod validate;
+mod workspace;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
@@ -54,6 +55,9 @@ enum Command {
     /// Servo readings that put the tip at each target (inverse kinematics), as a
     /// readings file for `solve --readings`.
     Reach(reach::Args),
+    /// The reachable workspace over the actuator limits: tip cloud, convex hull and
+    /// volume, SVG views, the coverage of a recording.
+    Workspace(workspace::Args),
 }
 
 /// The command line with negative numbers taken as values in every subcommand
@@ -90,6 +94,7 @@ fn main() -> std::process::ExitCode {
         Command::Stability(a) => stability::run(a),
         Command::Demo(a) => demo::run(a),
         Command::Reach(a) => reach::run(a),
+        Command::Workspace(a) => workspace::run(a),
     }));
     let result = match result {
         Ok(r) => r,
