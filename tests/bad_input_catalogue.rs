@@ -1639,3 +1639,32 @@ fn reach_bad_inputs_are_errors() {
     let r = run(&["reach", &scene, "--targets", &t, "--tolerance-mm", "-1"]);
     assert_error(&r, &["--tolerance-mm"]);
 }
+
+#[test]
+fn workspace_bad_inputs_are_errors() {
+    let dir = TempDir::new("workspace");
+    let scene = repo("data/calibration/ftdcr_v4_calibrated.toml");
+    let out = dir.0.join("out").display().to_string();
+    let r = run(&["workspace", &scene, "--samples", "0", "--output", &out]);
+    assert_error(&r, &["--samples", "at least 1"]);
+    // no limits: nothing bounds the box to sample
+    let text = scene_with(
+        "data/calibration/ftdcr_v4_calibrated.toml",
+        FTDCR_LIMITS,
+        "",
+    );
+    let s = dir.file("nolimits.toml", &text);
+    let r = run(&["workspace", &s, "--samples", "4", "--output", &out]);
+    assert_error(&r, &["robot.limits (servo_4_mm)", "finite limits"]);
+    // limits that exclude zero are refused when the scene is read
+    let text = scene_with(
+        "data/calibration/ftdcr_v4_calibrated.toml",
+        FTDCR_LIMITS,
+        "sections = [[-10.5, 5.5], [-10.5, 9.0], [1.0, 13.0]]",
+    );
+    let s = dir.file("excl.toml", &text);
+    let r = run(&["workspace", &s, "--samples", "4", "--output", &out]);
+    assert_error(&r, &["robot.limits", "excludes reading 0"]);
+    let r = run(&["workspace", &scene, "--val", &scene, "--output", &out]);
+    assert_error(&r, &["--val needs --recording"]);
+}

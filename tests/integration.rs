@@ -73,3 +73,4 @@ mod tendons;
 mod thesis_loo;
 mod thesis_tables;
 mod validate_hardware;
+mod workspace;
