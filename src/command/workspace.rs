@@ -348,7 +348,7 @@ pub fn sample_workspace(
         });
     }
     let mut base = tw.clone();
-    let mut ts = base.tendon_settings().clone();
+    let mut ts = *base.tendon_settings();
     ts.max_shooting_solves = ts.max_shooting_solves.min(settings.max_shooting_solves);
     base.set_tendon_settings(ts)?;
     let n = settings.samples;
@@ -556,7 +556,7 @@ impl Hull {
             let u = if len > 0.0 { nrm / len } else { nrm };
             planes.push((u, u.dot(&a)));
         }
-        if !(volume > 0.0) {
+        if volume.is_nan() || volume <= 0.0 {
             return Err(ModelError::Invalid {
                 field: "hull".into(),
                 why: "the points span no volume (all in one plane or line)".into(),

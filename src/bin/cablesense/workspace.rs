@@ -405,9 +405,9 @@ fn svg(title: &str, tips: &[Vector3<f64>], hull: &Hull, o: &Overlay) -> String {
             s,
             r##"<rect x="{ox}" y="{oy}" width="{PANEL}" height="{PANEL}" fill="none" stroke="#888"/>"##
         );
+        let view = views.get(panel).copied();
         let project = |p: &Vector3<f64>| -> (f64, f64) {
-            if panel < 3 {
-                let (_, i, j) = views[panel];
+            if let Some((_, i, j)) = view {
                 let u = (p[i] - centre[i]) / extent;
                 let v = (p[j] - centre[j]) / extent;
                 (ox + PANEL * (0.5 + u), oy + PANEL * (0.5 - v))
@@ -421,8 +421,7 @@ fn svg(title: &str, tips: &[Vector3<f64>], hull: &Hull, o: &Overlay) -> String {
                 )
             }
         };
-        let label = if panel < 3 {
-            let (n, i, j) = views[panel];
+        let label = if let Some((n, i, j)) = view {
             let ax = ["x", "y", "z"];
             format!(
                 "{n}: {} {:.0}..{:.0} mm, {} {:.0}..{:.0} mm",
