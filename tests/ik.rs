@@ -351,3 +351,31 @@ proptest! {
         prop_assert!(r.distance_m <= ik.settings().tolerance_m);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 8, ..config() })]
+
+    /// IK(forward(q)) reproduces forward(q)'s tip for random q inside the calibrated
+    /// FTDCR v4's shipped limits, started from q moved by up to 1 mm per tendon (kept
+    /// inside the limits). Readings whose forward solve does not converge (large
+    /// curls of the distal segment) are skipped.
+    #[test]
+    fn ftdcr_ik_of_forward_reproduces_the_tip(
+        u in proptest::collection::vec(0.0f64..1.0, 9),
+        d in proptest::collection::vec(-1.0f64..1.0, 9),
+    ) {
+        let scene = Scene::load(FTDCR).unwrap();
+        let mut ik = IkWorkspace::from_scene(&scene, IkSettings::default()).unwrap();
+        let (lo, hi) = (ik.limits().min_m.clone(), ik.limits().max_m.clone());
+        let q: Vec<f64> = (0..9).map(|i| lo[i] + u[i] * (hi[i] - lo[i])).collect();
+        let mut tw = scene.tendon_workspace().unwrap();
+        prop_assume!(tw.solve_readings(&q).unwrap().status.is_converged());
+        let tip = tw.tip_position();
+        let start: Vec<f64> = (0..9).map(|i| (q[i] + 1e-3 * d[i]).clamp(lo[i], hi[i])).collect();
+        prop_assume!(ik.set_readings(&start).is_ok());
+        let r = ik.solve(&IkTarget::position(tip)).unwrap();
+        prop_assert_eq!(r.status, IkStatus::Reached, "q {:?}: {:?}", q, r);
+        prop_assert!(r.distance_m <= ik.settings().tolerance_m);
+        prop_assert!(ik.readings().iter().zip(&lo).zip(&hi).all(|((v, l), h)| v >= l && v <= h));
+    }
+}

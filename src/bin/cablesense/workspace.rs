@@ -452,7 +452,7 @@ fn svg(title: &str, tips: &[Vector3<f64>], hull: &Hull, o: &Overlay) -> String {
             s,
             r##"<path d="{path}" stroke="#bbb" stroke-width="0.5" fill="none"/>"##
         );
-        dots(&mut s, &drawn, &project, "#3b6fb6", 0.9, 0.35);
+        dots(&mut s, &drawn, &project, "#3b6fb6", 1.4, 0.6);
         dots(&mut s, &o.recording, &project, "#e08a1e", 1.3, 0.8);
         dots(&mut s, &o.val_inside, &project, "#2a9d3a", 1.6, 0.9);
         dots(&mut s, &o.val_outside, &project, "#d62728", 2.2, 1.0);
