@@ -83,6 +83,7 @@ fn benches(c: &mut Criterion) {
 fn till_with_disks(n: usize) -> Robot {
     let h = 0.5 / n as f64;
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![SectionSpec {
             length_m: 0.5,

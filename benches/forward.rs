@@ -94,6 +94,7 @@ fn cable(hole: usize, end_section: usize) -> CableSpec {
 /// One 0.39 m section, five guides, three cables ending on the last disk.
 fn single_section_robot() -> Robot {
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![section(0.39, guides(5, 0.0054, 0.095))],
         cables: (0..3).map(|h| cable(h, 0)).collect(),
@@ -107,6 +108,7 @@ fn single_section_robot() -> Robot {
 fn two_section_robot() -> Robot {
     let s = || section(0.195, guides(4, 0.045, 0.045));
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![s(), s()],
         cables: (0..6).map(|j| cable(j % 3, j / 3)).collect(),

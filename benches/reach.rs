@@ -22,6 +22,7 @@ const D: f64 = 1.56e-3;
 
 fn rod() -> Robot {
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![SectionSpec {
             length_m: L,

@@ -195,6 +195,7 @@ fn cable(hole: usize, end_section: usize) -> CableSpec {
 /// One 0.39 m section, five guides, three cables ending on the last disk.
 fn single_section_robot() -> Robot {
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![section(0.39, guides(5, 0.0054, 0.095))],
         cables: (0..3).map(|h| cable(h, 0)).collect(),
@@ -208,6 +209,7 @@ fn single_section_robot() -> Robot {
 fn two_section_robot() -> Robot {
     let s = || section(0.195, guides(4, 0.045, 0.045));
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![s(), s()],
         cables: (0..6).map(|j| cable(j % 3, j / 3)).collect(),
@@ -453,6 +455,7 @@ fn till_disks_warm_ramp(iters: u64) -> Result<Outcome, String> {
 fn till_with_disks(n: usize) -> Robot {
     let h = 0.5 / n as f64;
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![SectionSpec {
             length_m: 0.5,

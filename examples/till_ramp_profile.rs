@@ -20,6 +20,7 @@ fn main() {
         let n = 100usize;
         let h = 0.5 / n as f64;
         let spec = RobotSpec {
+            limits: None,
             base: Default::default(),
             sections: vec![SectionSpec {
                 length_m: 0.5,

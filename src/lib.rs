@@ -3,6 +3,7 @@
 
 pub mod cables;
 pub mod calibrate;
+pub mod command;
 pub mod error;
 pub mod estimate;
 pub mod experiments;

@@ -1596,3 +1596,75 @@ fn long_bad_cell_is_shortened_in_the_message() {
     );
     assert_good_row(&rows, 3);
 }
+
+// ---------------------------------------------------------------------------------
+// Actuator limits and `reach` (issue 44)
+// ---------------------------------------------------------------------------------
+
+const FTDCR_LIMITS: &str = "sections = [[-10.5, 5.5], [-10.5, 9.0], [-10.5, 13.0]]";
+
+#[test]
+fn scene_limits_excluding_zero_name_the_tendon() {
+    let text = scene_with(
+        "data/scenes/ftdcr_v4.toml",
+        FTDCR_LIMITS,
+        "tendons = { servo_7_mm = [1.0, 5.0] }",
+    );
+    let r = solve_scene("limits0", "ftdcr.toml", &text);
+    assert_error(
+        &r,
+        &["robot.limits.tendons.servo_7_mm", "excludes reading 0"],
+    );
+    let text = scene_with(
+        "data/scenes/ftdcr_v4.toml",
+        FTDCR_LIMITS,
+        "tendons = { nope = [0.0, 1.0] }",
+    );
+    let r = solve_scene("limitsname", "ftdcr.toml", &text);
+    assert_error(&r, &["robot.limits.tendons.nope", "servo_4_mm"]);
+}
+
+#[test]
+fn reach_bad_inputs_are_errors() {
+    let dir = TempDir::new("reach");
+    let scene = repo("data/calibration/ftdcr_v4_calibrated.toml");
+    let r = run(&["reach", &scene]);
+    assert_error(&r, &["--targets"]);
+    let t = dir.file("t.csv", "x_m,y_m,z_m\n0,0,0.18\n0,inf,0.18\n");
+    let r = run(&["reach", &scene, "--targets", &t]);
+    assert_error(&r, &["t.csv:3", "`y_m` = `inf`"]);
+    let t = dir.file("u.csv", "x_m,y_m,z_m\n0,0,0.18\n");
+    let r = run(&["reach", &scene, "--targets", &t, "--objective", "fastest"]);
+    assert_error(&r, &["--objective `fastest`"]);
+    let r = run(&["reach", &scene, "--targets", &t, "--tolerance-mm", "-1"]);
+    assert_error(&r, &["--tolerance-mm"]);
+}
+
+#[test]
+fn workspace_bad_inputs_are_errors() {
+    let dir = TempDir::new("workspace");
+    let scene = repo("data/calibration/ftdcr_v4_calibrated.toml");
+    let out = dir.0.join("out").display().to_string();
+    let r = run(&["workspace", &scene, "--samples", "0", "--output", &out]);
+    assert_error(&r, &["--samples", "at least 1"]);
+    // no limits: nothing bounds the box to sample
+    let text = scene_with(
+        "data/calibration/ftdcr_v4_calibrated.toml",
+        FTDCR_LIMITS,
+        "",
+    );
+    let s = dir.file("nolimits.toml", &text);
+    let r = run(&["workspace", &s, "--samples", "4", "--output", &out]);
+    assert_error(&r, &["robot.limits (servo_4_mm)", "finite limits"]);
+    // limits that exclude zero are refused when the scene is read
+    let text = scene_with(
+        "data/calibration/ftdcr_v4_calibrated.toml",
+        FTDCR_LIMITS,
+        "sections = [[-10.5, 5.5], [-10.5, 9.0], [1.0, 13.0]]",
+    );
+    let s = dir.file("excl.toml", &text);
+    let r = run(&["workspace", &s, "--samples", "4", "--output", &out]);
+    assert_error(&r, &["robot.limits", "excludes reading 0"]);
+    let r = run(&["workspace", &scene, "--val", &scene, "--output", &out]);
+    assert_error(&r, &["--val needs --recording"]);
+}

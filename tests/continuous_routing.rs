@@ -39,6 +39,7 @@ fn solve_tip(robot: Robot, loads: &Loads, settings: SolverSettings) -> Vector3<f
 /// Till's rod (0.5 m steel, r = 1 mm) with `cables`, optionally with disks.
 fn till_spec(guides: Option<GuideSpec>, cables: Vec<CableSpec>) -> RobotSpec {
     RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![SectionSpec {
             length_m: 0.5,

@@ -453,6 +453,7 @@ fn disk_robot(disks: usize) -> Robot {
     let mut s = common::section(length, 1.56e-3);
     s.guides = Some(common::guides(disks, 0.5 * spacing, spacing));
     Robot::new(cablesense::RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![s],
         cables: (0..3)

@@ -429,6 +429,7 @@ impl ForwardInput {
             })
             .collect();
         Robot::new(RobotSpec {
+            limits: None,
             base: BaseSpec {
                 position_m: [0.0; 3],
                 axis: self.base.0,

@@ -50,6 +50,7 @@ use crate::calibrate::recording::RecordingRow;
 use crate::calibrate::CalibrationError;
 use crate::math::DenseLu;
 use crate::statics::Pose;
+use crate::tendons::ift::assemble_joint_jacobian;
 use crate::tendons::{TendonMechanics, TendonWorkspace};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -282,24 +283,17 @@ impl ReadingsModel {
                 return Ok(false);
             }
             base.cable_lengths_into(&mut l0);
-            let a = lu.matrix_mut();
-            for r in 0..nx {
-                a[r * m..(r + 1) * m].copy_from_slice(&jac_s[r * w..r * w + m]);
-            }
-            for (ti, &j) in self.ws.driven().iter().enumerate() {
-                let row_a = &mut a[(nx + ti) * m..(nx + ti + 1) * m];
-                if st.taut[ti] {
-                    let free = free0[ti] - (q0[ti] - mech[ti].zero_offset_m);
-                    let c = mech[ti].compliance(free, 1.0);
-                    for (col, v) in row_a.iter_mut().enumerate() {
-                        *v = -jac_m[j * w + col];
-                    }
-                    row_a[nx + ti] += c;
-                } else {
-                    row_a.fill(0.0);
-                    row_a[nx + ti] = 1.0;
-                }
-            }
+            assemble_joint_jacobian(
+                nx,
+                w,
+                &jac_s,
+                &jac_m,
+                self.ws.driven(),
+                &mech,
+                |ti| free0[ti] - (q0[ti] - mech[ti].zero_offset_m),
+                &st.taut,
+                lu.matrix_mut(),
+            );
             if !matches!(lu.factor(), Some(rc) if rc > 1e-14) {
                 return Ok(false);
             }

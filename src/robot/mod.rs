@@ -8,11 +8,13 @@
 //! sections it spans to the last guide of its `end_section`.
 
 mod friction;
+mod limits;
 mod routing;
 mod spec;
 mod tendon;
 
 pub use friction::capstan_factors;
+pub use limits::{ActuatorLimits, LimitsSpec};
 pub use routing::{PathPoint, PathSpec, RoutingField, TendonPath};
 pub use spec::{
     BaseSpec, CableFile, CableSpec, EvenLayout, EvenWord, GuideFile, GuideSpec, HolesSpec,

@@ -25,6 +25,10 @@ pub struct RobotSpec {
     /// Tendon-on-disk friction (capstan law). Default none (frictionless).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionSpec>,
+    /// Actuator limits of the displacement-driven tendons, in the readings' units
+    /// (`[robot.limits]`, [`super::LimitsSpec`]). Default none (unlimited).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits: Option<super::LimitsSpec>,
 }
 
 /// Base pose `r(0)`, `R(0)` (thesis table 2.1) as position plus axis-angle.
@@ -522,6 +526,9 @@ impl RobotSpec {
                     why: "a displacement-driven tendon needs its axial stiffness EA_t (N; `inf` for an inextensible tendon), here or in [robot.tendons]".into(),
                 });
             }
+        }
+        if let Some(l) = &self.limits {
+            l.validate(self)?;
         }
         Ok(())
     }

@@ -12,6 +12,7 @@
 
 pub mod calibration;
 pub mod estimate;
+mod limits;
 pub mod param;
 pub mod readings;
 

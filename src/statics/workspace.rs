@@ -131,6 +131,8 @@ pub struct Workspace {
     /// `lu` holds a factorised Jacobian of this plan (possibly from an earlier point).
     lu_valid: bool,
     tip: Vector3<f64>,
+    /// Tip axis `R(L) e_z` of the last evaluated point (unit, world frame).
+    tip_axis: Vector3<f64>,
     report: SolveReport,
     jac_evals: u64,
     /// Multiple shooting for large loads (`multi.rs`); `multi_active` when it holds
@@ -206,6 +208,7 @@ impl Workspace {
             has_solution: false,
             lu_valid: false,
             tip: Vector3::zeros(),
+            tip_axis: Vector3::z(),
             report: SolveReport {
                 status: SolveStatus::NonFinite,
                 iterations: 0,
@@ -397,7 +400,7 @@ impl crate::math::warm::WarmCopy for Workspace {
             tip_ok, tip_tan, tip_start, tip_first, last_intensity, tol, noise, branch_verdict,
             dx, res, lu, broyden, use_broyden, secant, holes_aux, wide,
             last_pass, has_solution, sens_s, sens_m, sens_col, dxdtheta, dxdtheta_valid,
-            lu_valid, tip, report, jac_evals, multi, multi_active,
+            lu_valid, tip, tip_axis, report, jac_evals, multi, multi_active,
         ], keep: [robot, loads, settings, plan, multi_supported, b64, b3, b6, b_arc]);
         // the pass buffers: whole under the condensed coupling (its next holes and
         // matrices are carried from pass to pass), else what a later pass reads

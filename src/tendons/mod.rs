@@ -40,6 +40,7 @@
 //! inextensible with given tensions; stretch, pretension and slack are what the
 //! position-controlled hardware adds (see `data/hardware/ftdcr_v4/`).
 
+pub(crate) mod ift;
 mod scene;
 mod solve;
 

@@ -359,6 +359,10 @@ impl TendonWorkspace {
     pub fn columns(&self) -> &[String] {
         &self.columns
     }
+    /// Mechanics of each driven tendon (stiffness, series spring, pretension).
+    pub fn mechanics(&self) -> &[TendonMechanics] {
+        &self.mech
+    }
     /// Free length `L0` of each driven tendon at reading 0 (m).
     pub fn rest_free_lengths(&self) -> &[f64] {
         &self.free0

@@ -112,6 +112,7 @@ pub fn guides(count: usize, first: f64, spacing: f64) -> GuideSpec {
 /// A robot from sections, no cables, base at the origin along world +z.
 pub fn robot_of(sections: Vec<SectionSpec>) -> Robot {
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections,
         cables: vec![],
@@ -131,6 +132,7 @@ pub fn five_guide_robot() -> Robot {
     let mut s = section(0.39, 1.56e-3);
     s.guides = Some(guides(5, 0.0054, 0.095));
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![s],
         cables: (0..3)
@@ -175,6 +177,7 @@ pub fn two_section_robot_first_at(first: f64) -> Robot {
         ..Default::default()
     }));
     Robot::new(RobotSpec {
+        limits: None,
         base: Default::default(),
         sections: vec![a, b],
         cables,

@@ -9,6 +9,7 @@ mod output;
 mod pareto;
 mod plot_track;
 mod progress;
+mod reach;
 mod readings;
 mod solve;
 mod stability;
@@ -16,6 +17,7 @@ mod stream;
 mod tendon_estimate;
 mod track;
 mod validate;
+mod workspace;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
@@ -50,6 +52,12 @@ enum Command {
     Stability(stability::Args),
     /// The shipped scenes and data embedded in this binary: list them or copy them out.
     Demo(demo::Args),
+    /// Servo readings that put the tip at each target (inverse kinematics), as a
+    /// readings file for `solve --readings`.
+    Reach(reach::Args),
+    /// The reachable workspace over the actuator limits: tip cloud, convex hull and
+    /// volume, SVG views, the coverage of a recording.
+    Workspace(workspace::Args),
 }
 
 /// The command line with negative numbers taken as values in every subcommand
@@ -85,6 +93,8 @@ fn main() -> std::process::ExitCode {
         Command::Pareto(a) => pareto::run(a),
         Command::Stability(a) => stability::run(a),
         Command::Demo(a) => demo::run(a),
+        Command::Reach(a) => reach::run(a),
+        Command::Workspace(a) => workspace::run(a),
     }));
     let result = match result {
         Ok(r) => r,

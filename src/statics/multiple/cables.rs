@@ -218,6 +218,7 @@ mod tests {
             }),
         };
         Robot::new(RobotSpec {
+            limits: None,
             base: Default::default(),
             sections: vec![section],
             cables: (0..3)

@@ -281,6 +281,13 @@ impl Multi {
         self.ends.last().map_or(Vector3::zeros(), |y| y.r)
     }
 
+    /// Tip axis `R(L) e_z` of the current state (world frame).
+    pub fn tip_axis(&self) -> Vector3<f64> {
+        self.ends
+            .last()
+            .map_or(Vector3::z(), |y| y.rot.column(2).into_owned())
+    }
+
     /// Base internal force and moment `(n(0), m(0))` of the current state.
     pub fn base_wrench(&self) -> (Vector3<f64>, Vector3<f64>) {
         self.nodes

@@ -81,6 +81,7 @@ impl Workspace {
         match out {
             Ok(y) => {
                 self.tip = y.r;
+                self.tip_axis = y.rot.column(2).into_owned();
                 let local = self.b64.local_tol;
                 if !trial {
                     // a second settled evaluation of the same point: its settle noise
@@ -251,6 +252,7 @@ impl Workspace {
         match out {
             Ok(y) => {
                 self.tip = y.r;
+                self.tip_axis = y.rot.column(2).into_owned();
                 true
             }
             Err(_) => false,

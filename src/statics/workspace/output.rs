@@ -71,6 +71,15 @@ impl Workspace {
         self.tip
     }
 
+    /// Tip axis `R(L) e_z` of the last evaluated point (unit vector, world frame): the
+    /// direction the tip points in, for a direction target of inverse kinematics.
+    pub fn tip_axis(&self) -> Vector3<f64> {
+        if self.multi_active {
+            return self.multi.tip_axis();
+        }
+        self.tip_axis
+    }
+
     /// Full solution of the current point (allocates: samples, poses, lengths).
     pub fn solution(&mut self) -> Solution {
         if self.multi_active {

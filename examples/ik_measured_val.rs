@@ -1,0 +1,115 @@
+//! The measured val tips of FTDCR v4 as inverse-kinematics targets: how far the
+//! closest reachable tip of the calibrated model lies from each measured tip (the
+//! model's error seen from the other side), beside the forward error at the
+//! recorded readings.
+//!
+//! Each val row: the measured marker mapped to the base frame by the calibration's
+//! `capture_to_base`; the tip target is that marker less the marker offset turned
+//! by the model's tip orientation at the recorded readings (an approximation: the
+//! measured orientation is not recorded). IK runs warm from the previous row's
+//! result, inside `[robot.limits]`. Readings are taken as recorded (no time offset
+//! or backlash conditioning), so the forward figure is the raw-readings one.
+//!
+//! `cargo run --release --example ik_measured_val [ROWS]`
+use cablesense::calibrate::RigidTransform;
+use cablesense::command::{IkSettings, IkStatus, IkTarget, IkWorkspace};
+use cablesense::nalgebra::Vector3;
+use cablesense::validation::{CALIBRATED_SCENE, VAL_CSV};
+use cablesense::Scene;
+
+fn pct(v: &[f64], f: f64) -> f64 {
+    v[((v.len() - 1) as f64 * f).round() as usize]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let rows: usize = std::env::args()
+        .nth(1)
+        .map_or(Ok(usize::MAX), |s| s.parse())?;
+    let scene = Scene::parse_validated(
+        CALIBRATED_SCENE,
+        std::path::Path::new("data/calibration/ftdcr_v4_calibrated.toml"),
+        false,
+    )?;
+    let cal = scene.calibration.clone().ok_or("no [calibration]")?;
+    let frame = RigidTransform::from_vector(
+        &Vector3::from(cal.capture_to_base.rotation_vector),
+        &Vector3::from(cal.capture_to_base.translation_m),
+    );
+    let offset = Vector3::from(cal.marker_offset_m);
+    let mut tw = scene.tendon_workspace()?;
+    let mut parser = scene.readings_parser(&tw);
+    let mut ik = IkWorkspace::from_scene(&scene, IkSettings::default())?;
+    let (mut fwd, mut reach, mut dq) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut fwd_err, mut counts) = (Vec::new(), [0usize; 3]);
+    let t0 = std::time::Instant::now();
+    for (i, l) in VAL_CSV.lines().enumerate() {
+        if fwd.len() >= rows {
+            break;
+        }
+        let Ok(Some(r)) = parser.line(i + 1, l) else {
+            continue;
+        };
+        let Some(m) = r.measured_tip_m else { continue };
+        if !tw.solve_readings(&r.readings_m)?.status.is_converged() {
+            continue;
+        }
+        let pose = *tw.workspace_mut().solution().tip();
+        let marker = frame.apply(&Vector3::from(m));
+        let model_marker = pose.position + pose.rotation * offset;
+        fwd_err.push(model_marker - marker);
+        fwd.push((model_marker - marker).norm());
+        let target = marker - pose.rotation * offset;
+        let rep = ik.solve(&IkTarget::position(target))?;
+        counts[match rep.status {
+            IkStatus::Reached => 0,
+            IkStatus::Unreachable { .. } => 1,
+            IkStatus::BudgetExhausted => 2,
+        }] += 1;
+        reach.push(rep.distance_m);
+        let d: f64 = ik
+            .readings()
+            .iter()
+            .zip(&r.readings_m)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>();
+        dq.push((d / r.readings_m.len() as f64).sqrt());
+    }
+    let n = fwd.len();
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    let mean = fwd_err.iter().sum::<Vector3<f64>>() / n as f64;
+    let centred: Vec<f64> = fwd_err.iter().map(|e| (e - mean).norm()).collect();
+    for v in [&mut fwd, &mut reach, &mut dq] {
+        v.sort_by(f64::total_cmp);
+    }
+    println!(
+        "{n} val rows ({:.1} s): IK {} reached, {} unreachable, {} out of budget",
+        t0.elapsed().as_secs_f64(),
+        counts[0],
+        counts[1],
+        counts[2]
+    );
+    println!(
+        "forward error at the recorded readings (mm): RMSE {:.3} raw, {:.3} mean offset removed; median {:.3}, 95 % {:.3}, max {:.3}",
+        rms(&fwd) * 1e3,
+        rms(&centred) * 1e3,
+        pct(&fwd, 0.5) * 1e3,
+        pct(&fwd, 0.95) * 1e3,
+        pct(&fwd, 1.0) * 1e3
+    );
+    println!(
+        "reached distance to the measured tip (mm): RMS {:.3}; median {:.4}, 90 % {:.3}, 95 % {:.3}, max {:.3}; within 0.05 mm {:.1} %",
+        rms(&reach) * 1e3,
+        pct(&reach, 0.5) * 1e3,
+        pct(&reach, 0.9) * 1e3,
+        pct(&reach, 0.95) * 1e3,
+        pct(&reach, 1.0) * 1e3,
+        100.0 * reach.iter().filter(|d| **d <= 5e-5).count() as f64 / n as f64
+    );
+    println!(
+        "IK readings against the recorded ones (RMS over the 9 tendons, mm): median {:.3}, 95 % {:.3}, max {:.3}",
+        pct(&dq, 0.5) * 1e3,
+        pct(&dq, 0.95) * 1e3,
+        pct(&dq, 1.0) * 1e3
+    );
+    Ok(())
+}

@@ -1,0 +1,536 @@
+//! `cablesense workspace [SCENE]`: the reachable workspace of a robot driven by
+//! actuator readings, sampled over the box of its `[robot.limits]`
+//! (`cablesense::command::workspace`): the tip cloud (CSV), its convex hull
+//! (OBJ) and volume, a summary (JSON) and an SVG with the `xy`, `xz` and `yz` views
+//! and a 3-D perspective. With `--recording FILE` the recording's measured markers
+//! (the scene's `[calibration]` capture frame) are overlaid, with the coverage: the
+//! share of the model's hull that the recording's hull covers, and with `--val FILE`
+//! which of its rows lie outside the recording's hull. Without arguments: the
+//! embedded calibrated FTDCR v4 scene, its train recording and its val rows, written
+//! to `out/workspace/`.
+
+use crate::progress;
+use anyhow::{bail, Context};
+use cablesense::calibrate::{Recording, RigidTransform};
+use cablesense::command::{sample_workspace, Hull, WorkspaceCloud, WorkspaceSettings};
+use cablesense::nalgebra::Vector3;
+use cablesense::validation::{column_map, CALIBRATED_SCENE, TRAIN_CSV, VAL_CSV};
+use cablesense::Scene;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Quasi-Monte Carlo points of the coverage estimate.
+const COVERAGE_POINTS: usize = 200_000;
+/// Most cloud points drawn per view (every k-th sample; the CSV has them all).
+const DRAWN_POINTS: usize = 6000;
+/// A tip this far outside a hull plane still counts as inside (m): round-off.
+const INSIDE_TOLERANCE_M: f64 = 1e-9;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene with displacement-driven tendons and `[robot.limits]` (a path, or
+    /// `demo:NAME`). Default: the embedded calibrated FTDCR v4 scene.
+    scene: Option<PathBuf>,
+    /// Samples of the actuator box (Halton sequence).
+    #[arg(long, default_value_t = 20_000)]
+    samples: usize,
+    /// Output folder (created).
+    #[arg(long, default_value = "out/workspace")]
+    output: PathBuf,
+    /// A recording (the scene's `[calibration]` columns) whose measured markers are
+    /// overlaid. Default without a scene: the embedded FTDCR v4 train.csv.
+    #[arg(long)]
+    recording: Option<PathBuf>,
+    /// Rows to check against the recording's hull (same columns). Default without a
+    /// scene: the embedded FTDCR v4 val.csv.
+    #[arg(long)]
+    val: Option<PathBuf>,
+    /// Threads (0: all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Measured markers of a recording in the base frame, with their file lines.
+struct Measured {
+    name: String,
+    lines: Vec<usize>,
+    points: Vec<Vector3<f64>>,
+}
+
+fn measured(scene: &Scene, name: &str, text: &str) -> anyhow::Result<Measured> {
+    let map = column_map(scene).with_context(|| format!("{name}: reading the markers"))?;
+    let rec = Recording::parse_str(name, text, &map)?;
+    let spec = scene.calibration.clone().unwrap_or_default();
+    let frame = RigidTransform::from_vector(
+        &Vector3::from(spec.capture_to_base.rotation_vector),
+        &Vector3::from(spec.capture_to_base.translation_m),
+    );
+    Ok(Measured {
+        name: name.to_string(),
+        lines: rec.rows.iter().map(|r| r.line).collect(),
+        points: rec.rows.iter().map(|r| frame.apply(&r.marker_m)).collect(),
+    })
+}
+
+fn read(p: &Path) -> anyhow::Result<String> {
+    std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))
+}
+
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    if a.samples == 0 {
+        bail!("--samples must be at least 1 (got 0)");
+    }
+    let (scene, name) = match &a.scene {
+        Some(p) => {
+            let r = cablesense::files::demo::DataRef::parse(p)?;
+            (r.scene()?, r.display())
+        }
+        None => (
+            Scene::parse_validated(
+                CALIBRATED_SCENE,
+                Path::new("data/calibration/ftdcr_v4_calibrated.toml"),
+                false,
+            )?,
+            "embedded calibrated FTDCR v4".to_string(),
+        ),
+    };
+    let recording = match (&a.recording, &a.scene) {
+        (Some(f), _) => Some(measured(&scene, &f.display().to_string(), &read(f)?)?),
+        (None, None) => Some(measured(&scene, "train.csv (embedded)", TRAIN_CSV)?),
+        (None, Some(_)) => None,
+    };
+    let val = match (&a.val, &a.scene) {
+        (Some(_), _) if recording.is_none() => bail!("--val needs --recording"),
+        (Some(f), _) => Some(measured(&scene, &f.display().to_string(), &read(f)?)?),
+        (None, None) if a.recording.is_none() => {
+            Some(measured(&scene, "val.csv (embedded)", VAL_CSV)?)
+        }
+        _ => None,
+    };
+    // the measured point is the marker: set it against the model's marker
+    let marker_offset = match &scene.calibration {
+        Some(c) if recording.is_some() && c.marker_s_m.is_none() => {
+            Some(Vector3::from(c.marker_offset_m))
+        }
+        _ => None,
+    };
+    let tw = scene
+        .tendon_workspace()
+        .with_context(|| format!("{name}: the readings model"))?;
+    let limits = scene.actuator_limits()?;
+    let settings = WorkspaceSettings {
+        samples: a.samples,
+        threads: a.threads,
+        marker_offset_m: marker_offset,
+        ..WorkspaceSettings::default()
+    };
+    let pb = progress::bar(a.samples as u64, a.quiet);
+    let t0 = std::time::Instant::now();
+    let cloud = sample_workspace(&tw, &limits, &settings, &|d| pb.set_position(d as u64))
+        .with_context(|| format!("{name}: sampling the workspace"))?;
+    let sample_s = t0.elapsed().as_secs_f64();
+    pb.finish_and_clear();
+    let tips = cloud.solved_tips();
+    let hull = Hull::of(&tips).with_context(|| {
+        format!(
+            "{name}: the hull of the {} solved tips ({} of {} samples failed)",
+            tips.len(),
+            cloud.failed(),
+            cloud.len()
+        )
+    })?;
+    let outside = tips
+        .iter()
+        .filter(|t| !hull.contains(t, INSIDE_TOLERANCE_M))
+        .count();
+    std::fs::create_dir_all(&a.output)
+        .with_context(|| format!("creating {}", a.output.display()))?;
+    let scale = scene.readings_scale_m();
+    write_cloud(&cloud, scale, &a.output.join("cloud.csv"))?;
+    write_obj(&hull, &name, &a.output.join("hull.obj"))?;
+    // coverage of a recording
+    let mut summary = serde_json::json!({
+        "scene": name,
+        "samples": cloud.len(),
+        "solved": tips.len(),
+        "solved_stepped": cloud.stepped(),
+        "solved_cold": cloud.cold(),
+        "failed": cloud.failed(),
+        "sampling_s": sample_s,
+        "hull_vertices": hull.vertices.len(),
+        "hull_triangles": hull.triangles.len(),
+        "hull_volume_m3": hull.volume_m3,
+        "tips_outside_hull": outside,
+        "limits_min": limits.min_m.iter().map(|v| v / scale).collect::<Vec<_>>(),
+        "limits_max": limits.max_m.iter().map(|v| v / scale).collect::<Vec<_>>(),
+        "columns": cloud.columns,
+    });
+    let mut lines = vec![format!(
+        "{} samples ({name}): {} solved ({} by continuation from the previous sample, {} after a cold retry), {} failed, in {:.1} s",
+        cloud.len(),
+        tips.len(),
+        cloud.stepped(),
+        cloud.cold(),
+        cloud.failed(),
+        sample_s
+    )];
+    lines.push(format!(
+        "convex hull: {} vertices, {} triangles, volume {:.1} cm^3 ({:.3e} m^3); solved tips outside it: {outside}",
+        hull.vertices.len(),
+        hull.triangles.len(),
+        hull.volume_m3 * 1e6,
+        hull.volume_m3
+    ));
+    let mut overlay = Overlay::default();
+    if let Some(rec) = &recording {
+        let model_markers = if marker_offset.is_some() {
+            cloud.solved_markers()
+        } else {
+            tips.clone()
+        };
+        let model_hull = Hull::of(&model_markers).context("the hull of the model's markers")?;
+        let rec_hull = Hull::of(&rec.points)
+            .with_context(|| format!("{}: the hull of its markers", rec.name))?;
+        let covered = model_hull.covered_fraction(&rec_hull, COVERAGE_POINTS);
+        let rec_outside = rec
+            .points
+            .iter()
+            .filter(|p| !model_hull.contains(p, 0.0))
+            .count();
+        let what = if marker_offset.is_some() {
+            "the model's marker points (tip + marker offset)"
+        } else {
+            "the model's tips"
+        };
+        lines.push(format!(
+            "{}: {} rows; its hull {:.1} cm^3 covers {:.1} % of the hull of {what} ({:.1} cm^3); {} of its rows lie outside that hull",
+            rec.name,
+            rec.points.len(),
+            rec_hull.volume_m3 * 1e6,
+            100.0 * covered,
+            model_hull.volume_m3 * 1e6,
+            rec_outside
+        ));
+        summary["recording"] = serde_json::json!({
+            "file": rec.name,
+            "rows": rec.points.len(),
+            "hull_volume_m3": rec_hull.volume_m3,
+            "model_point": if marker_offset.is_some() { "marker" } else { "tip" },
+            "model_hull_volume_m3": model_hull.volume_m3,
+            "covered_fraction": covered,
+            "rows_outside_model_hull": rec_outside,
+        });
+        overlay.recording = rec.points.clone();
+        overlay.model_markers = marker_offset.is_some();
+        if let Some(v) = &val {
+            let out: Vec<usize> = v
+                .points
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| !rec_hull.contains(p, 0.0))
+                .map(|(k, _)| k)
+                .collect();
+            let mut csv = String::from("row,line,x_m,y_m,z_m,outside_recording_hull,excess_m\n");
+            for (k, p) in v.points.iter().enumerate() {
+                writeln!(
+                    csv,
+                    "{k},{},{},{},{},{},{}",
+                    v.lines[k],
+                    p.x,
+                    p.y,
+                    p.z,
+                    out.contains(&k),
+                    rec_hull.excess(p).max(0.0)
+                )?;
+            }
+            std::fs::write(a.output.join("val_coverage.csv"), csv)?;
+            let far = out
+                .iter()
+                .map(|&k| rec_hull.excess(&v.points[k]))
+                .fold(0.0f64, f64::max);
+            lines.push(format!(
+                "{}: {} of {} rows lie outside the hull of {} (farthest {:.2} mm beyond a face); rows in val_coverage.csv",
+                v.name,
+                out.len(),
+                v.points.len(),
+                rec.name,
+                far * 1e3
+            ));
+            summary["val"] = serde_json::json!({
+                "file": v.name,
+                "rows": v.points.len(),
+                "outside_recording_hull": out.len(),
+                "outside_lines": out.iter().map(|&k| v.lines[k]).collect::<Vec<_>>(),
+                "farthest_beyond_m": far,
+            });
+            overlay.val_inside = (0..v.points.len())
+                .filter(|k| !out.contains(k))
+                .map(|k| v.points[k])
+                .collect();
+            overlay.val_outside = out.iter().map(|&k| v.points[k]).collect();
+        }
+    }
+    summary["lines"] = serde_json::json!(lines);
+    std::fs::write(
+        a.output.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?,
+    )?;
+    let title = format!(
+        "Reachable workspace, {name}: {} of {} samples solved, convex hull {:.1} cm^3",
+        tips.len(),
+        cloud.len(),
+        hull.volume_m3 * 1e6
+    );
+    std::fs::write(
+        a.output.join("workspace.svg"),
+        svg(&title, &tips, &hull, &overlay),
+    )?;
+    for l in &lines {
+        eprintln!("{l}");
+    }
+    eprintln!(
+        "wrote {}/{{cloud.csv, hull.obj, summary.json, workspace.svg{}}}",
+        a.output.display(),
+        if val.is_some() {
+            ", val_coverage.csv"
+        } else {
+            ""
+        }
+    );
+    Ok(if cloud.failed() == 0 && outside == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+fn write_cloud(cloud: &WorkspaceCloud, scale: f64, path: &Path) -> anyhow::Result<()> {
+    let mut s = String::new();
+    let markers = !cloud.markers_m.is_empty();
+    writeln!(
+        s,
+        "sample,{},tip_x_m,tip_y_m,tip_z_m,{}status",
+        cloud.columns.join(","),
+        if markers {
+            "marker_x_m,marker_y_m,marker_z_m,"
+        } else {
+            ""
+        }
+    )?;
+    for k in 0..cloud.len() {
+        let q: Vec<String> = cloud
+            .readings(k)
+            .iter()
+            .map(|v| format!("{}", v / scale))
+            .collect();
+        let t = cloud.tips_m[k];
+        write!(s, "{},{},{},{},{},", k + 1, q.join(","), t.x, t.y, t.z)?;
+        if markers {
+            let m = cloud.markers_m[k];
+            write!(s, "{},{},{},", m.x, m.y, m.z)?;
+        }
+        writeln!(s, "{}", cloud.status[k].name())?;
+    }
+    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
+}
+
+fn write_obj(hull: &Hull, name: &str, path: &Path) -> anyhow::Result<()> {
+    let mut s = format!(
+        "# convex hull of the reachable tips of {name} (m); volume {:e} m^3\n",
+        hull.volume_m3
+    );
+    for v in &hull.vertices {
+        writeln!(s, "v {} {} {}", v.x, v.y, v.z)?;
+    }
+    for t in &hull.triangles {
+        writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+    }
+    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
+}
+
+/// What is drawn over the cloud.
+#[derive(Default)]
+struct Overlay {
+    recording: Vec<Vector3<f64>>,
+    model_markers: bool,
+    val_inside: Vec<Vector3<f64>>,
+    val_outside: Vec<Vector3<f64>>,
+}
+
+/// Four panels: `xy`, `xz`, `yz` (orthographic, one scale for all, mm) and a
+/// perspective view (camera at azimuth 45 deg, elevation 25 deg, three extents away).
+fn svg(title: &str, tips: &[Vector3<f64>], hull: &Hull, o: &Overlay) -> String {
+    const PANEL: f64 = 420.0;
+    const PAD: f64 = 36.0;
+    let (w, h) = (2.0 * PANEL + 3.0 * PAD, 2.0 * PANEL + 3.0 * PAD + 90.0);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{PAD}" y="22" font-size="14">{}</text>"#,
+        escape(title)
+    );
+    let (lo, hi) = hull.bounds();
+    let centre = (lo + hi) * 0.5;
+    let extent = (hi - lo).max() * 1.1;
+    let stride = (tips.len() / DRAWN_POINTS).max(1);
+    let drawn: Vec<Vector3<f64>> = tips.iter().step_by(stride).copied().collect();
+    let mut edges: Vec<(usize, usize)> = hull
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    // camera of the perspective panel
+    let (az, el) = (45f64.to_radians(), 25f64.to_radians());
+    let fwd = -Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+    let right = fwd.cross(&Vector3::z()).normalize();
+    let up = right.cross(&fwd);
+    let eye = centre - fwd * (3.0 * extent);
+    let views: [(&str, usize, usize); 3] = [("x-y (top)", 0, 1), ("x-z", 0, 2), ("y-z", 1, 2)];
+    for panel in 0..4 {
+        let ox = PAD + (panel % 2) as f64 * (PANEL + PAD);
+        let oy = 40.0 + (panel / 2) as f64 * (PANEL + PAD);
+        let _ = writeln!(
+            s,
+            r##"<rect x="{ox}" y="{oy}" width="{PANEL}" height="{PANEL}" fill="none" stroke="#888"/>"##
+        );
+        let view = views.get(panel).copied();
+        let project = |p: &Vector3<f64>| -> (f64, f64) {
+            if let Some((_, i, j)) = view {
+                let u = (p[i] - centre[i]) / extent;
+                let v = (p[j] - centre[j]) / extent;
+                (ox + PANEL * (0.5 + u), oy + PANEL * (0.5 - v))
+            } else {
+                let d = p - eye;
+                let z = d.dot(&fwd);
+                let f = 3.0 / z; // focal length: the extent spans about the panel
+                (
+                    ox + PANEL * (0.5 + f * d.dot(&right)),
+                    oy + PANEL * (0.5 - f * d.dot(&up)),
+                )
+            }
+        };
+        let label = if let Some((n, i, j)) = view {
+            let ax = ["x", "y", "z"];
+            format!(
+                "{n}: {} {:.0}..{:.0} mm, {} {:.0}..{:.0} mm",
+                ax[i],
+                (centre[i] - 0.5 * extent) * 1e3,
+                (centre[i] + 0.5 * extent) * 1e3,
+                ax[j],
+                (centre[j] - 0.5 * extent) * 1e3,
+                (centre[j] + 0.5 * extent) * 1e3
+            )
+        } else {
+            "perspective (azimuth 45 deg, elevation 25 deg)".to_string()
+        };
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}">{}</text>"#,
+            ox + 4.0,
+            oy + 14.0,
+            escape(&label)
+        );
+        let mut path = String::new();
+        for &(a, b) in &edges {
+            let (x0, y0) = project(&hull.vertices[a]);
+            let (x1, y1) = project(&hull.vertices[b]);
+            let _ = write!(path, "M{x0:.1} {y0:.1}L{x1:.1} {y1:.1}");
+        }
+        let _ = writeln!(
+            s,
+            r##"<path d="{path}" stroke="#bbb" stroke-width="0.5" fill="none"/>"##
+        );
+        dots(&mut s, &drawn, &project, "#3b6fb6", 1.4, 0.6);
+        dots(&mut s, &o.recording, &project, "#e08a1e", 1.3, 0.8);
+        dots(&mut s, &o.val_inside, &project, "#2a9d3a", 1.6, 0.9);
+        dots(&mut s, &o.val_outside, &project, "#d62728", 2.2, 1.0);
+    }
+    let ly = 40.0 + 2.0 * (PANEL + PAD) + 4.0;
+    let legend = [
+        (
+            "#3b6fb6",
+            format!(
+                "model tips at the sampled readings ({} of {} drawn; all in cloud.csv); grey: edges of their convex hull (over-states a non-convex workspace)",
+                drawn.len(),
+                tips.len()
+            ),
+        ),
+        (
+            "#e08a1e",
+            format!(
+                "recording: measured markers, base frame ({} rows){}",
+                o.recording.len(),
+                if o.model_markers {
+                    "; its coverage is computed against the model's marker points"
+                } else {
+                    ""
+                }
+            ),
+        ),
+        (
+            "#2a9d3a",
+            format!(
+                "val rows inside the recording's hull ({})",
+                o.val_inside.len()
+            ),
+        ),
+        (
+            "#d62728",
+            format!(
+                "val rows outside the recording's hull ({})",
+                o.val_outside.len()
+            ),
+        ),
+    ];
+    for (k, (c, t)) in legend.iter().enumerate() {
+        let y = ly + 18.0 * k as f64;
+        let _ = writeln!(
+            s,
+            r#"<circle cx="{}" cy="{}" r="4" fill="{c}"/><text x="{}" y="{}">{}</text>"#,
+            PAD + 4.0,
+            y,
+            PAD + 14.0,
+            y + 4.0,
+            escape(t)
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+fn dots(
+    s: &mut String,
+    pts: &[Vector3<f64>],
+    project: &dyn Fn(&Vector3<f64>) -> (f64, f64),
+    colour: &str,
+    r: f64,
+    opacity: f64,
+) {
+    if pts.is_empty() {
+        return;
+    }
+    let _ = write!(s, r#"<g fill="{colour}" fill-opacity="{opacity}">"#);
+    for p in pts {
+        let (x, y) = project(p);
+        let _ = write!(s, r#"<circle cx="{x:.1}" cy="{y:.1}" r="{r}"/>"#);
+    }
+    s.push_str("</g>\n");
+}
+
+fn escape(t: &str) -> String {
+    t.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
