@@ -131,8 +131,11 @@ fn percentile(sorted: &[f64], f: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * f).round() as usize]
 }
 
-pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    let (scene, name) = match &a.scene {
+/// The scene a command subcommand (`reach`, `workspace`) works on and its name for
+/// messages: the one named (a path or `demo:` reference), else the embedded
+/// calibrated FTDCR v4.
+pub fn scene_or_calibrated(scene: Option<&std::path::Path>) -> anyhow::Result<(Scene, String)> {
+    Ok(match scene {
         Some(p) => {
             let r = cablesense::files::demo::DataRef::parse(p)?;
             (r.scene()?, r.display())
@@ -145,7 +148,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             )?,
             "embedded calibrated FTDCR v4".to_string(),
         ),
-    };
+    })
+}
+
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let (scene, name) = scene_or_calibrated(a.scene.as_deref())?;
     let objective = match a.objective.as_str() {
         "closest" => IkObjective::Closest,
         "least_pull" => IkObjective::LeastPull,

@@ -14,7 +14,7 @@ use anyhow::{bail, Context};
 use cablesense::calibrate::{Recording, RigidTransform};
 use cablesense::command::{sample_workspace, Hull, WorkspaceCloud, WorkspaceSettings};
 use cablesense::nalgebra::Vector3;
-use cablesense::validation::{column_map, CALIBRATED_SCENE, TRAIN_CSV, VAL_CSV};
+use cablesense::validation::{column_map, TRAIN_CSV, VAL_CSV};
 use cablesense::Scene;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -84,20 +84,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if a.samples == 0 {
         bail!("--samples must be at least 1 (got 0)");
     }
-    let (scene, name) = match &a.scene {
-        Some(p) => {
-            let r = cablesense::files::demo::DataRef::parse(p)?;
-            (r.scene()?, r.display())
-        }
-        None => (
-            Scene::parse_validated(
-                CALIBRATED_SCENE,
-                Path::new("data/calibration/ftdcr_v4_calibrated.toml"),
-                false,
-            )?,
-            "embedded calibrated FTDCR v4".to_string(),
-        ),
-    };
+    let (scene, name) = crate::reach::scene_or_calibrated(a.scene.as_deref())?;
     let recording = match (&a.recording, &a.scene) {
         (Some(f), _) => Some(measured(&scene, &f.display().to_string(), &read(f)?)?),
         (None, None) => Some(measured(&scene, "train.csv (embedded)", TRAIN_CSV)?),
