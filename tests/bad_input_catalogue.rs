@@ -1577,6 +1577,31 @@ fn duplicate_column_is_refused_naming_both_positions() {
     assert_error(&r, &["rec.csv:1", "column given twice (columns 2 and "]);
 }
 
+/// A quoted `"0,001"` (a decimal comma) was split into two cells by the readings
+/// reader and kept whole by the calibration reader: every reader now splits lines
+/// the same way (`files::rows`, the `csv` crate), so the cell is one cell, refused as
+/// a number, with the row's neighbours read; an open quote is an error, not a cell
+/// that swallows the rest of the line.
+#[test]
+fn a_quoted_decimal_comma_is_one_cell_in_every_reader() {
+    let (r, rows) = track_rows(&format!(
+        "{ENC_HEADER}0.0,0,\"0,001\",0\n0.0,0,\"0,0\n{ENC_GOOD}"
+    ));
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert_row_error(&rows, 2, "left", &["`0,001` is not a number"]);
+    assert_row_error(&rows, 3, "row", &["quote is not closed"]);
+    assert_good_row(&rows, 4);
+    let text = recording(|i, l| {
+        Some(if i == 5 {
+            set_cell(l, 1, "\"0,001\"")
+        } else {
+            l.into()
+        })
+    });
+    let r = calibrate("quoted", &text, &[]);
+    assert_error(&r, &["rec.csv:5", "`0,001` is not a number"]);
+}
+
 /// A 10 MB bad cell was echoed whole in the error line: now its start and length.
 #[test]
 fn long_bad_cell_is_shortened_in_the_message() {

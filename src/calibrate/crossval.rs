@@ -272,26 +272,26 @@ pub fn row_labels(
     recording: &Recording,
 ) -> Result<Vec<String>, CalibrationError> {
     let bad = |s: String| Err(CalibrationError::BadInput(s));
-    let lines: Vec<&str> = text.lines().collect();
-    let Some(header) = lines.first() else {
-        return bad(format!("{}: empty file", recording.file));
-    };
-    let names: Vec<&str> = header.split(',').map(|c| c.trim()).collect();
-    let Some(col) = names.iter().position(|n| *n == column) else {
+    let csv = crate::files::rows::CsvText::parse(text, true).map_err(|(line, why)| {
+        CalibrationError::BadInput(format!("{} line {line}: {why}", recording.file))
+    })?;
+    let Some(col) = csv.column(column) else {
         return bad(format!(
             "{}: no column `{}` (columns: {})",
             recording.file,
             shorten(column),
-            shorten(&names.join(", "))
+            shorten(&csv.names.join(", "))
         ));
     };
     let mut out = Vec::with_capacity(recording.rows.len());
     for row in &recording.rows {
-        let cell = lines
-            .get(row.line.wrapping_sub(1))
-            .and_then(|l| l.split(',').nth(col));
+        let cell = csv
+            .rows
+            .binary_search_by_key(&row.line, |(line, _)| *line)
+            .ok()
+            .and_then(|i| csv.rows[i].1.get(col));
         match cell {
-            Some(c) => out.push(c.trim().to_string()),
+            Some(c) => out.push(c.clone()),
             None => {
                 return bad(format!(
                     "{} line {}: no cell in column `{column}`",

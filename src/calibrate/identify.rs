@@ -197,12 +197,6 @@ pub struct Pattern {
     pub runner_up_gap_m: f64,
 }
 
-fn split_csv(line: &str) -> Vec<String> {
-    line.split(',')
-        .map(|c| c.trim().trim_matches('"').to_string())
-        .collect()
-}
-
 impl PullRecording {
     /// Parse CSV text (header line; BOM, CRLF, `#` and blank lines tolerated).
     /// Servo readings are multiplied by `servo_scale_m`, tips by `tip_scale_m`.
@@ -214,17 +208,15 @@ impl PullRecording {
         servo_scale_m: f64,
         tip_scale_m: f64,
     ) -> Result<Self, IdentifyError> {
-        let mut lines = text
-            .trim_start_matches('\u{feff}')
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
-            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-        let (hline, header) = lines.next().ok_or_else(|| IdentifyError::Mismatch {
-            file: file.into(),
-            why: "empty file".into(),
+        let csv = crate::files::rows::CsvText::parse(text, true).map_err(|(line, why)| {
+            IdentifyError::BadCell {
+                file: file.into(),
+                line,
+                column: "-".into(),
+                why,
+            }
         })?;
-        let names = split_csv(header);
+        let (hline, names) = (csv.header_line, &csv.names);
         let available = names.join(", ");
         let find = |c: &str, what: &str| {
             names
@@ -257,8 +249,8 @@ impl PullRecording {
             });
         }
         let mut rows = Vec::new();
-        for (line, l) in lines {
-            let cells = split_csv(l);
+        for (line, cells) in &csv.rows {
+            let line = *line;
             if cells.len() > names.len() {
                 // a shifted row would be read as if it were right (as in
                 // `Recording`: a short row names its first missing column below)

@@ -116,26 +116,6 @@ fn cell_err(file: &str, line: usize, column: String, why: String) -> Calibration
 }
 
 /// Split one CSV line into cells (double quotes group, `""` is a quote).
-fn split_csv(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '"' if quoted && chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            '"' => quoted = !quoted,
-            ',' if !quoted => out.push(std::mem::take(&mut cur)),
-            c => cur.push(c),
-        }
-    }
-    out.push(cur);
-    out.into_iter().map(|c| c.trim().to_string()).collect()
-}
-
 fn number(file: &str, line: usize, column: &str, cell: &str) -> Result<f64, CalibrationError> {
     if cell.is_empty() {
         return Err(cell_err(file, line, column.into(), "empty cell".into()));
@@ -269,12 +249,7 @@ impl Recording {
 
     /// Parse recording text; `file` names it in errors.
     pub fn parse_str(file: &str, text: &str, map: &ColumnMap) -> Result<Self, CalibrationError> {
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let lines = text
-            .split('\n')
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
-            .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+        let lines = crate::files::rows::data_lines(text);
         let mut layout: Option<Layout> = None;
         let mut rows = Vec::new();
         let mut json: Option<bool> = None;
@@ -302,7 +277,8 @@ impl Recording {
                 };
                 rows.push(lay.row(file, line, map.unit, &get)?);
             } else {
-                let cells = split_csv(l);
+                let cells = crate::files::rows::split(l)
+                    .map_err(|why| cell_err(file, line, "-".into(), why))?;
                 if layout.is_none() && !map.header.is_empty() {
                     // headerless: the names come from the map, this line is data
                     header = map.header.clone();

@@ -121,10 +121,9 @@ impl StreamParser {
 
     /// Parse one line. `Ok(None)` for blank, comment (`#`) and CSV header lines.
     pub fn line(&mut self, line_no: usize, text: &str) -> Result<Option<Sample>, LineError> {
-        let t = text.trim_start_matches('\u{feff}').trim();
-        if t.is_empty() || t.starts_with('#') {
+        let Some(t) = super::rows::content(text) else {
             return Ok(None);
-        }
+        };
         if let Some(at) = self.stopped_at {
             return Err(LineError {
                 fatal: true,
@@ -160,7 +159,8 @@ impl StreamParser {
     }
 
     fn csv(&mut self, line: usize, t: &str) -> Result<Option<Sample>, LineError> {
-        let cells: Vec<&str> = t.split(',').map(str::trim).collect();
+        let cells = super::rows::split(t).map_err(|why| Self::err(line, "row", why))?;
+        let cells: Vec<&str> = cells.iter().map(String::as_str).collect();
         let Some(cols) = &self.columns else {
             if let Some((a, b, name)) = super::duplicate_column(&cells) {
                 let why = format!(

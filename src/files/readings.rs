@@ -197,15 +197,15 @@ impl ReadingsParser {
 
     /// Parse one line: `Ok(None)` for blank lines, comments and headers.
     pub fn line(&mut self, line_no: usize, text: &str) -> Result<Option<ReadingRow>, LineError> {
-        let t = text.trim_start_matches('\u{feff}').trim();
-        if t.is_empty() || t.starts_with('#') {
+        let Some(t) = super::rows::content(text) else {
             return Ok(None);
-        }
+        };
         let json = *self.json.get_or_insert(t.starts_with('{'));
         if json {
             return self.json_row(line_no, t).map(Some);
         }
-        let cells: Vec<&str> = t.split(',').map(|c| c.trim().trim_matches('"')).collect();
+        let cells = super::rows::split(t).map_err(|why| Self::err(line_no, "row", why))?;
+        let cells: Vec<&str> = cells.iter().map(String::as_str).collect();
         let looks_like_header = cells.iter().any(|c| {
             matches!(self.classify(c), Col::Reading(_) | Col::Time) && c.parse::<f64>().is_err()
         });

@@ -407,8 +407,9 @@ impl Figure {
     }
 }
 
-/// 1, 2 or 5 times a power of ten, at least `raw`.
-fn nice_step(raw: f64) -> f64 {
+/// 1, 2 or 5 times a power of ten, at least `raw`: the tick spacing of every SVG
+/// chart the project writes (shape views, calibration report, workspace).
+pub fn nice_step(raw: f64) -> f64 {
     let p = 10f64.powf(raw.max(1e-12).log10().floor());
     [1.0, 2.0, 5.0, 10.0]
         .into_iter()
@@ -427,7 +428,8 @@ fn label(v: f64, step: f64) -> String {
     format!("{v:.decimals$}")
 }
 
-fn escape(t: &str) -> String {
+/// `t` as SVG/XML text (`&`, `<`, `>` escaped).
+pub fn escape(t: &str) -> String {
     t.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

@@ -48,23 +48,19 @@ pub enum TableError {
 impl Table {
     /// Parse CSV text (comma-separated, one header line, `#` comment lines skipped).
     pub fn parse(text: &str, path: &str) -> Result<Self, TableError> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-        let (_, header) = lines.next().ok_or(TableError::Parse {
-            path: path.into(),
-            line: 1,
-            why: "empty file".into(),
-        })?;
-        let columns: Vec<String> = header.split(',').map(|c| c.trim().to_string()).collect();
+        let csv =
+            super::rows::CsvText::parse(text, true).map_err(|(line, why)| TableError::Parse {
+                path: path.into(),
+                line,
+                why,
+            })?;
+        let columns = csv.names;
         let mut rows = Vec::new();
-        for (i, l) in lines {
-            let cells: Vec<&str> = l.split(',').map(str::trim).collect();
+        for (line, cells) in &csv.rows {
             if cells.len() != columns.len() {
                 return Err(TableError::Parse {
                     path: path.into(),
-                    line: i + 1,
+                    line: *line,
                     why: format!("{} cells, header has {}", cells.len(), columns.len()),
                 });
             }
@@ -74,7 +70,7 @@ impl Table {
                 .map(|(c, name)| {
                     c.parse::<f64>().map_err(|_| TableError::Parse {
                         path: path.into(),
-                        line: i + 1,
+                        line: *line,
                         why: format!("column `{name}`: `{}` is not a number", super::shorten(c)),
                     })
                 })

@@ -60,15 +60,10 @@ pub struct Args {
 
 /// Parse a targets CSV.
 fn parse_targets(text: &str, file: &str) -> anyhow::Result<Vec<IkTarget>> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_start_matches('\u{feff}').trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let Some((_, header)) = lines.next() else {
-        bail!("{file}: no header (expected columns x_m,y_m,z_m)");
-    };
-    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    let csv = cablesense::files::rows::CsvText::parse(text, false).map_err(|(line, why)| {
+        anyhow::anyhow!("{file}:{line}: {why} (expected columns x_m,y_m,z_m)")
+    })?;
+    let (cols, header) = (&csv.names, csv.names.join(","));
     let find = |name: &str| cols.iter().position(|c| *c == name);
     let pos = ["x_m", "y_m", "z_m"].map(find);
     let [Some(x), Some(y), Some(z)] = pos else {
@@ -80,8 +75,7 @@ fn parse_targets(text: &str, file: &str) -> anyhow::Result<Vec<IkTarget>> {
         _ => bail!("{file}: a direction needs all of dx, dy, dz"),
     };
     let mut out = Vec::new();
-    for (line, l) in lines {
-        let cells: Vec<&str> = l.split(',').map(str::trim).collect();
+    for (line, cells) in &csv.rows {
         let num = |k: usize, name: &str| -> anyhow::Result<f64> {
             let c = cells
                 .get(k)
