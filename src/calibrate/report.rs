@@ -8,6 +8,7 @@
 
 use super::fit::{CalibrationReport, RowResult, Split};
 use super::CalibrationError;
+use crate::files::svg::escape;
 use crate::files::Scene;
 use crate::scene::calibration::{CalibrationSpec, TransformSpec};
 use crate::scene::{set_params, ParamPath};
@@ -179,14 +180,14 @@ impl Panel {
             r#"<text x="{:.2}" y="{:.2}" font-size="13" text-anchor="middle">{}</text>"#,
             self.x0 + self.w / 2.0,
             self.y0 - 8.0,
-            esc(title)
+            escape(title)
         );
         let _ = writeln!(
             s,
             r#"<text x="{:.2}" y="{:.2}" font-size="11" text-anchor="middle">{}</text>"#,
             self.x0 + self.w / 2.0,
             self.y0 + self.h + 32.0,
-            esc(xlabel)
+            escape(xlabel)
         );
         let _ = writeln!(
             s,
@@ -195,7 +196,7 @@ impl Panel {
             self.y0 + self.h / 2.0,
             self.x0 - 40.0,
             self.y0 + self.h / 2.0,
-            esc(ylabel)
+            escape(ylabel)
         );
         for t in ticks(self.lo.0, self.hi.0) {
             let x = self.px(t);
@@ -252,25 +253,13 @@ impl Panel {
     }
 }
 
-fn esc(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
 /// About 5 round tick values covering `[lo, hi]`.
 fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     let span = hi - lo;
     if span.is_nan() || span <= 0.0 || !span.is_finite() {
         return vec![lo];
     }
-    let raw = span / 5.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0]
-        .iter()
-        .map(|m| m * mag)
-        .find(|s| *s >= raw)
-        .unwrap_or(10.0 * mag);
+    let step = crate::files::svg::nice_step(span / 5.0);
     let mut t = (lo / step).ceil() * step;
     let mut out = Vec::new();
     while t <= hi + 1e-9 * step && out.len() < 20 {
@@ -347,25 +336,25 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
     let _ = writeln!(
         s,
         r#"<text x="20" y="24" font-size="15">{}</text>"#,
-        esc(&opts.title)
+        escape(&opts.title)
     );
     let _ = writeln!(
         s,
         r#"<text x="20" y="44" font-size="11">{}</text>"#,
-        esc(&line(&report.train, "train"))
+        escape(&line(&report.train, "train"))
     );
     if let Some(v) = &report.val {
         let _ = writeln!(
             s,
             r#"<text x="20" y="60" font-size="11">{}</text>"#,
-            esc(&line(v, "val"))
+            escape(&line(v, "val"))
         );
     }
     if !report.failed_rows.is_empty() {
         let _ = writeln!(
             s,
             r#"<text x="20" y="92" font-size="11" fill="{MODEL}">{}</text>"#,
-            esc(&format!(
+            escape(&format!(
                 "{} rows left out, their solve failed even from cold: {}",
                 report.failed_rows.len(),
                 super::FailedRow::list(&report.failed_rows, 12)

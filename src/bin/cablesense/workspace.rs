@@ -13,6 +13,7 @@ use crate::progress;
 use anyhow::{bail, Context};
 use cablesense::calibrate::{Recording, RigidTransform};
 use cablesense::command::{sample_workspace, Hull, WorkspaceCloud, WorkspaceSettings};
+use cablesense::files::svg::escape;
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{column_map, TRAIN_CSV, VAL_CSV};
 use cablesense::Scene;
@@ -514,10 +515,4 @@ fn dots(
         let _ = write!(s, r#"<circle cx="{x:.1}" cy="{y:.1}" r="{r}"/>"#);
     }
     s.push_str("</g>\n");
-}
-
-fn escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
