@@ -24,11 +24,61 @@
 
 use super::TendonWorkspace;
 use crate::error::ModelError;
+use crate::loads::Loads;
+use crate::robot::Actuation;
 
 impl TendonWorkspace {
     /// Number of extra load parameters (after the tensions).
     pub fn extra_count(&self) -> usize {
         self.n_extra
+    }
+
+    /// Replace the scene's external loads (gravity, point loads and payloads, and
+    /// the tensions of tension-driven cables) on a live workspace, keeping its warm
+    /// start: the next solve starts from the last converged state, now under these
+    /// loads, instead of a new workspace's cold reference solve. Displacement-driven
+    /// and passive cables must have tension 0 here (their tensions follow from the
+    /// readings, as in [`TendonWorkspace::new`]). Each driven tendon's free length at
+    /// reading 0, `L0`, stays the one of the reference solve at construction: a
+    /// payload does not change a tendon's length, so the solves that follow are those
+    /// of the same robot carrying the new loads (not those of a workspace built from
+    /// a scene with these loads, whose reference would fix other `L0`). A pending
+    /// rollback is applied first. An invalid value is an error naming the field and
+    /// changes nothing. Allocates (a copy of the shooting unknowns and one of the
+    /// state for the rollback; when the load structure changes, the inner
+    /// workspace's rebuild, [`crate::Workspace::set_loads`], whose straight-rod start
+    /// is replaced by the last shape): not for a hot loop.
+    pub fn set_loads(&mut self, loads: &Loads) -> Result<(), ModelError> {
+        for (j, c) in self.ws.robot().cables().iter().enumerate() {
+            if c.actuation != Actuation::Tension && loads.tension(j) != 0.0 {
+                return Err(ModelError::Invalid {
+                    field: format!("loads.tensions_n[{j}]"),
+                    why: format!(
+                        "cable `{}` is not tension-driven: its tension follows from the readings (0 here)",
+                        c.name
+                    ),
+                });
+            }
+        }
+        self.apply_rollback();
+        let x = self.ws.unknowns_vector().to_vec();
+        self.ws.set_loads(loads)?;
+        if self.ws.unknowns_vector() != &x[..] {
+            // a new load structure rebuilt the shooting workspace from the straight
+            // rod: its warm start is the last state's shape (the tensions are kept
+            // here), evaluated under the new loads
+            self.ws.adopt_unknowns(&x, true);
+        }
+        // the extrapolation history, the cached lengths and sensitivities belong to
+        // the old loads
+        self.joint.forget_history();
+        self.sens_fresh = false;
+        if self.rollback.enabled {
+            // the kept state must have the new loads' structure (warm copies need it)
+            self.rollback.good = None;
+            self.rollback.good = Some(Box::new(self.clone()));
+        }
+        Ok(())
     }
 
     /// The readings (m) that mean `q = 0` for every driven tendon (each tendon's
