@@ -12,7 +12,7 @@ use cablesense::estimate::{Estimate, Estimator};
 use cablesense::files::demo::DataRef;
 use cablesense::loads::Loads;
 use cablesense::{ModelError, Scene as CoreScene, Solution, Start, Workspace};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -286,8 +286,9 @@ pub(crate) fn read_f64s(
             expected()
         ))
     };
-    if let Ok(ndim) = obj.getattr("ndim").and_then(|n| n.extract::<usize>()) {
-        if ndim != 1 {
+    // (a type check, not a getattr: no exception object on the good path of a list)
+    if let Ok(a) = obj.cast::<numpy::PyUntypedArray>() {
+        if a.ndim() != 1 {
             return Err(type_err(describe(obj)));
         }
     }
