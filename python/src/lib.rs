@@ -9,8 +9,10 @@ mod tendons;
 mod validation;
 
 use cablesense::estimate::{Estimate, Estimator};
+use cablesense::files::demo::DataRef;
+use cablesense::loads::Loads;
 use cablesense::{ModelError, Scene as CoreScene, Solution, Start, Workspace};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -68,18 +70,20 @@ pub(crate) fn from_model_error(py: Python<'_>, e: ModelError) -> PyErr {
 }
 
 /// A validated scene: robot, loads, numerics and optional `[estimate]`.
-#[pyclass(module = "cablesense", frozen)]
-#[derive(Clone)]
+#[pyclass(module = "cablesense", frozen, eq)]
+#[derive(Clone, PartialEq)]
 pub(crate) struct Scene {
     pub(crate) inner: CoreScene,
 }
 
 #[pymethods]
 impl Scene {
-    /// Read a `.toml` or `.json` scene file.
+    /// Read a `.toml` or `.json` scene file, or an embedded demo scene named
+    /// `demo:NAME` (e.g. `demo:scenes/ftdcr_v4.toml`; `cablesense.demo.names()`).
     #[staticmethod]
     fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        CoreScene::load(&path)
+        let r = DataRef::parse(&path).map_err(|e| scene_err(py, e.to_string(), None))?;
+        r.scene()
             .map(|inner| Self { inner })
             .map_err(|e| from_scene_error(py, e))
     }
@@ -97,6 +101,53 @@ impl Scene {
         CoreScene::parse_validated(&text, Path::new("<dict>"), true)
             .map(|inner| Self { inner })
             .map_err(|e| from_scene_error(py, e))
+    }
+    /// The scene as a dict with the layout of the TOML file (every field, defaults
+    /// included): `Scene.from_dict(scene.to_dict()) == scene`.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = self.to_json(py)?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+    /// The scene as TOML text (every field, defaults included), e.g. to save a
+    /// calibrated scene: `Scene.from_toml(scene.to_toml()) == scene`.
+    fn to_toml(&self, py: Python<'_>) -> PyResult<String> {
+        toml::to_string_pretty(&self.inner)
+            .map_err(|e| scene_err(py, format!("cannot write the scene as TOML: {e}"), None))
+    }
+    /// The scene as JSON text (what `to_dict` and pickling carry; floats round-trip
+    /// exactly).
+    fn to_json(&self, py: Python<'_>) -> PyResult<String> {
+        serde_json::to_string(&self.inner)
+            .map_err(|e| scene_err(py, format!("cannot write the scene as JSON: {e}"), None))
+    }
+    /// Parse JSON text (the layout of `to_json`, as a `.json` scene file).
+    #[staticmethod]
+    fn from_json(py: Python<'_>, text: &str) -> PyResult<Self> {
+        CoreScene::parse_validated(text, Path::new("<json>"), true)
+            .map(|inner| Self { inner })
+            .map_err(|e| from_scene_error(py, e))
+    }
+    /// A copy of the scene with its `[loads]` table replaced by the keys of `loads`
+    /// (the layout of the TOML table: `gravity_m_s2`, `point`, `tensions_n`); keys
+    /// not given keep the scene's values. Validated like a scene.
+    fn with_loads(&self, py: Python<'_>, loads: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let merged = merged_loads(py, &self.inner.loads, loads)?;
+        let mut inner = self.inner.clone();
+        inner.loads = merged;
+        inner.validate().map_err(|e| from_model_error(py, e))?;
+        Ok(Self { inner })
+    }
+    /// Pickling: the scene travels as its JSON text (floats exact) and is validated
+    /// again on loading.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let f = py.get_type::<Scene>().getattr("from_json")?;
+        Ok((f, (self.to_json(py)?,)))
+    }
+    fn __copy__(&self) -> Self {
+        self.clone()
+    }
+    fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+        self.clone()
     }
     /// Free-text description.
     #[getter]
@@ -123,6 +174,44 @@ impl Scene {
     }
 }
 
+/// `current` with the keys of the dict `d` (the layout of the `[loads]` table)
+/// replacing its values; a bad key or value raises `SceneError` naming it.
+pub(crate) fn merged_loads(
+    py: Python<'_>,
+    current: &Loads,
+    d: &Bound<'_, PyDict>,
+) -> PyResult<Loads> {
+    let cur = serde_json::to_value(current)
+        .map_err(|e| scene_err(py, format!("loads: {e}"), Some("loads".into())))?;
+    // (JSON has no inf or NaN: json refuses them here, with the scene's error type)
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("allow_nan", false)?;
+    let given: String = py
+        .import("json")?
+        .call_method("dumps", (d,), Some(&kwargs))
+        .map_err(|e| {
+            scene_err(
+                py,
+                format!(
+                    "loads: every value must be a finite number, list or table ({})",
+                    e.value(py)
+                ),
+                Some("loads".into()),
+            )
+        })?
+        .extract()?;
+    let given: serde_json::Value = serde_json::from_str(&given)
+        .map_err(|e| scene_err(py, format!("loads: {e}"), Some("loads".into())))?;
+    let mut merged = cur;
+    if let (Some(m), Some(g)) = (merged.as_object_mut(), given.as_object()) {
+        for (k, v) in g {
+            m.insert(k.clone(), v.clone());
+        }
+    }
+    serde_json::from_value(merged)
+        .map_err(|e| scene_err(py, format!("loads: {e}"), Some("loads".into())))
+}
+
 fn workspace(py: Python<'_>, scene: &CoreScene) -> PyResult<Workspace> {
     let robot = scene.build_robot().map_err(|e| from_model_error(py, e))?;
     Workspace::new(robot, scene.loads.clone(), scene.numerics.clone())
@@ -142,10 +231,45 @@ pub(crate) fn readings_err(py: Python<'_>, e: ModelError, line: Option<usize>) -
     err
 }
 
-/// Copy a sequence of floats or a 1-D float64 array into `buf` (cleared first;
-/// no allocation once `buf` has the capacity). `what` names the argument in a
-/// type error.
-pub(crate) fn read_f64s(obj: &Bound<'_, PyAny>, buf: &mut Vec<f64>, what: &str) -> PyResult<()> {
+/// How a Python value looks in a type error: `ndarray of shape (3, 9) and dtype
+/// int64`, `list of 3 items`, or the type name.
+pub(crate) fn describe(obj: &Bound<'_, PyAny>) -> String {
+    let ty = obj
+        .get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "object".into());
+    if let (Ok(shape), Ok(dtype)) = (obj.getattr("shape"), obj.getattr("dtype")) {
+        let shape: Vec<usize> = shape.extract().unwrap_or_default();
+        let shape = match shape.len() {
+            1 => format!("({},)", shape[0]),
+            _ => format!(
+                "({})",
+                shape
+                    .iter()
+                    .map(|d| d.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        return format!("{ty} of shape {shape} and dtype {dtype}");
+    }
+    match obj.len() {
+        Ok(n) if !obj.is_instance_of::<pyo3::types::PyString>() => format!("{ty} of {n} items"),
+        _ => ty,
+    }
+}
+
+/// Copy a sequence of floats or a 1-D float array into `buf` (cleared first; no
+/// allocation once `buf` has the capacity for a float64 array). `what` names the
+/// argument and `expected` says its shape (e.g. `9 readings (m)`) in a `TypeError`
+/// (called only then: no allocation on the good path).
+pub(crate) fn read_f64s(
+    obj: &Bound<'_, PyAny>,
+    buf: &mut Vec<f64>,
+    what: &str,
+    expected: impl Fn() -> String,
+) -> PyResult<()> {
     buf.clear();
     if let Ok(a) = obj.cast::<numpy::PyArray1<f64>>() {
         let a = a.readonly();
@@ -156,14 +280,91 @@ pub(crate) fn read_f64s(obj: &Bound<'_, PyAny>, buf: &mut Vec<f64>, what: &str) 
         buf.extend(a.as_array().iter());
         return Ok(());
     }
-    for item in obj.try_iter().map_err(|_| {
+    let type_err = |got: String| {
         pyo3::exceptions::PyTypeError::new_err(format!(
-            "{what}: expected a sequence of floats or a 1-D float64 array"
+            "{what}: expected {} as a sequence of floats or a 1-D float array; got {got}",
+            expected()
         ))
-    })? {
-        buf.push(item?.extract::<f64>()?);
+    };
+    // (a type check, not a getattr: no exception object on the good path of a list)
+    if let Ok(a) = obj.cast::<numpy::PyUntypedArray>() {
+        if a.ndim() != 1 {
+            return Err(type_err(describe(obj)));
+        }
+    }
+    let items = obj.try_iter().map_err(|_| type_err(describe(obj)))?;
+    for (i, item) in items.enumerate() {
+        let item = item?;
+        match item.extract::<f64>() {
+            Ok(v) => buf.push(v),
+            Err(_) => {
+                return Err(type_err(format!(
+                    "{}, whose item {i} is {}",
+                    describe(obj),
+                    describe(&item)
+                )))
+            }
+        }
     }
     Ok(())
+}
+
+/// Rows read by [`read_rows`].
+pub(crate) struct RowsIn {
+    /// Row count.
+    pub n: usize,
+    /// Column count (the caller checks it).
+    pub cols: usize,
+    /// Row-major values.
+    pub data: Vec<f64>,
+    /// What was expected and what came (for the caller's column-count error).
+    pub shape_msg: String,
+}
+
+/// A 2-D float64 array of `cols` columns from `obj` (an array of any real dtype or
+/// nested sequences, converted by `numpy.asarray`).
+/// `what` names the argument and `expected` a row (e.g. `9 readings (m)`); a value
+/// numpy cannot convert, or of another dimension, raises `TypeError` saying what
+/// was expected and what came. The column count is the caller's to check (the
+/// returned message names shapes for it).
+pub(crate) fn read_rows(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    cols: usize,
+    what: &str,
+    expected: &str,
+) -> PyResult<RowsIn> {
+    let msg = |got: String| {
+        format!(
+            "{what}: expected a 2-D float array of shape (n, {cols}), one row of {expected} per solve; got {got}"
+        )
+    };
+    let arr = match obj.cast::<numpy::PyArray2<f64>>() {
+        Ok(a) => a.clone(),
+        Err(_) => {
+            let np = py.import("numpy")?;
+            let converted = np
+                .call_method1("asarray", (obj, np.getattr("float64")?))
+                .map_err(|e| {
+                    pyo3::exceptions::PyTypeError::new_err(msg(format!(
+                        "{} that numpy cannot convert to float64 ({})",
+                        describe(obj),
+                        e.value(py)
+                    )))
+                })?;
+            converted
+                .cast_into::<numpy::PyArray2<f64>>()
+                .map_err(|_| pyo3::exceptions::PyTypeError::new_err(msg(describe(obj))))?
+        }
+    };
+    let a = arr.readonly();
+    let (n, c) = a.as_array().dim();
+    Ok(RowsIn {
+        n,
+        cols: c,
+        data: a.as_array().iter().copied().collect(),
+        shape_msg: msg(describe(obj)),
+    })
 }
 
 /// A status as the snake-case string of the Python API.
@@ -300,6 +501,30 @@ impl Solver {
         self.solved = sol.report.status.is_converged();
         with_diagnosis(solution_dict(py, &sol)?, why)
     }
+    /// Replace the loads of the next solves, keeping the warm start (no new scene,
+    /// no cold solve): `loads` has the layout of the scene's `[loads]` table
+    /// (`gravity_m_s2`, `point`, `tensions_n`); keys not given keep their values.
+    /// With the same structure (point-load sites and frames, set of tensioned
+    /// cables) nothing is rebuilt. A bad value raises `SceneError` naming the field
+    /// and changes nothing.
+    fn set_loads(&mut self, py: Python<'_>, loads: &Bound<'_, PyDict>) -> PyResult<()> {
+        let merged = merged_loads(py, self.ws.loads(), loads)?;
+        self.ws
+            .set_loads(&merged)
+            .map_err(|e| from_model_error(py, e))
+    }
+    /// The loads in effect, as a dict with the layout of the `[loads]` table.
+    #[getter]
+    fn loads<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        loads_dict(py, self.ws.loads())
+    }
+}
+
+/// Loads as a dict with the layout of the `[loads]` table.
+pub(crate) fn loads_dict<'py>(py: Python<'py>, loads: &Loads) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(loads)
+        .map_err(|e| scene_err(py, format!("loads: {e}"), Some("loads".into())))?;
+    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// The scene's `[estimate]` problem.
@@ -387,11 +612,15 @@ impl PyEstimator {
         sigma: Option<&Bound<'py, PyAny>>,
         snapshot: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        read_f64s(changes, &mut self.changes, "changes")?;
-        if let Some(s) = sigma {
-            read_f64s(s, &mut self.sigma, "sigma")?;
-        }
         let c = self.est.reference_lengths().len();
+        read_f64s(changes, &mut self.changes, "changes", || {
+            format!("{c} cable length changes (m)")
+        })?;
+        if let Some(s) = sigma {
+            read_f64s(s, &mut self.sigma, "sigma", || {
+                format!("{c} noise levels (m)")
+            })?;
+        }
         if self.changes.len() != c || sigma.is_some() && self.sigma.len() != c {
             return Err(PyValueError::new_err(format!(
                 "{} changes{} for {c} cables",
@@ -477,6 +706,31 @@ impl PyEstimator {
     }
 }
 
+/// The embedded demo files: (name, what it is for) in `demo list` order; a name is
+/// used as `demo:NAME` wherever a scene path is expected.
+#[pyfunction]
+fn demo_files() -> Vec<(&'static str, &'static str)> {
+    cablesense::files::demo::FILES
+        .iter()
+        .map(|f| (f.path, f.about))
+        .collect()
+}
+
+/// The text of the embedded demo file `name` (with or without the `demo:` prefix).
+#[pyfunction]
+fn demo_text(name: &str) -> PyResult<&'static str> {
+    let name = name
+        .strip_prefix(cablesense::files::demo::PREFIX)
+        .unwrap_or(name);
+    cablesense::files::demo::get(name)
+        .map(|f| f.text)
+        .ok_or_else(|| {
+            pyo3::exceptions::PyKeyError::new_err(format!(
+                "no embedded demo file `{name}` (cablesense.demo.names() lists them)"
+            ))
+        })
+}
+
 /// The module.
 #[pymodule]
 fn _cablesense(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -486,6 +740,8 @@ fn _cablesense(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyEstimator>()?;
     m.add_class::<tendons::TendonSolver>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(demo_files, m)?)?;
+    m.add_function(wrap_pyfunction!(demo_text, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(validation::validate_thesis, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::predict_recording, m)?)?;

@@ -3,11 +3,14 @@
 //! `Scene::tendon_workspace()`), one row at a time warm-started, a 2-D array of rows,
 //! or the lines of a readings file streamed through the scene's `[readings]` parser.
 
-use crate::{from_model_error, read_f64s, readings_err, report_status, solution_dict, Scene};
+use crate::{
+    from_model_error, loads_dict, merged_loads, read_f64s, read_rows, readings_err, report_status,
+    solution_dict, Scene,
+};
 use cablesense::files::readings::{ReadingRow, ReadingsParser};
 use cablesense::tendons::{TendonReport, TendonWorkspace};
 use cablesense::{ModelError, Start};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -21,15 +24,27 @@ struct Row {
     report: TendonReport,
     /// Why the row did not converge (`TendonWorkspace::diagnose`); `None` if it did.
     diagnosis: Option<String>,
+    /// Arc length (m) and backbone positions (m, `3 * stations`) of the row's
+    /// solution, when asked for (`solve_many(shapes=True)`).
+    shape: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Row {
-    fn take(ws: &mut TendonWorkspace, report: TendonReport) -> Self {
+    fn take(ws: &mut TendonWorkspace, report: TendonReport, shape: bool) -> Self {
         let sol = ws.workspace_mut().solution();
         let mut section_tips = Vec::with_capacity(3 * sol.section_tips.len());
         for t in &sol.section_tips {
             section_tips.extend(t.position.iter());
         }
+        let shape = shape.then(|| {
+            let s = sol.samples.iter().map(|x| x.s).collect();
+            let r = sol
+                .samples
+                .iter()
+                .flat_map(|x| x.r.iter().copied())
+                .collect();
+            (s, r)
+        });
         let tip = ws.tip_position();
         Self {
             tip: [tip.x, tip.y, tip.z],
@@ -39,6 +54,7 @@ impl Row {
             lengths: ws.lengths().to_vec(),
             report,
             diagnosis: (!report.status.is_converged()).then(|| ws.diagnose().to_string()),
+            shape,
         }
     }
 }
@@ -83,6 +99,9 @@ pub struct TendonSolver {
     ws: TendonWorkspace,
     /// The readings of one row (reused: no allocation per call for the input).
     q: Vec<f64>,
+    /// The readings `solve()` without readings solves (`set_readings`, or the last
+    /// row solved).
+    current: Vec<f64>,
     parser: ReadingsParser,
     scale_m: f64,
 }
@@ -126,6 +145,7 @@ impl TendonSolver {
         let parser = s.readings_parser(&ws);
         Ok(Self {
             q: vec![0.0; ws.driven().len()],
+            current: ws.zero_readings(),
             scale_m: s.readings.as_ref().map_or(1.0, |r| r.scale_m),
             parser,
             ws,
@@ -189,68 +209,127 @@ impl TendonSolver {
     }
 
     /// Solve one row: `readings` (m, one per driven tendon, in `columns` order; a
-    /// sequence or a 1-D float array). Warm from the previous solve unless
-    /// `warm=False`. Returns {tip (3,), section_tips (k, 3), tensions (p,) N,
-    /// taut (p,) bool, lengths (c,) m of every cable, report}. A bad reading (wrong
-    /// count, NaN, pulling in more than the whole tendon) raises `ReadingsError`
-    /// whose `field` names it, e.g. `readings[1] (s1b)`.
-    #[pyo3(signature = (readings, warm = true))]
+    /// sequence or a 1-D float array; None: the readings of `set_readings`, else of
+    /// the last row). Warm from the previous solve unless `warm=False`. Returns
+    /// {tip (3,), section_tips (k, 3), tensions (p,) N, taut (p,) bool, lengths (c,)
+    /// m of every cable, report}. A bad reading (wrong count, NaN, pulling in more
+    /// than the whole tendon) raises `ReadingsError` whose `field` names it, e.g.
+    /// `readings[1] (s1b)`; a value that is not a sequence of numbers `TypeError`.
+    #[pyo3(signature = (readings = None, warm = true))]
     fn solve<'py>(
         &mut self,
         py: Python<'py>,
-        readings: &Bound<'py, PyAny>,
+        readings: Option<&Bound<'py, PyAny>>,
         warm: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        read_f64s(readings, &mut self.q, "readings")?;
+        let p = self.current.len();
+        match readings {
+            Some(r) => read_f64s(r, &mut self.q, "readings", || format!("{p} readings (m)"))?,
+            None => self.q.clone_from(&self.current),
+        }
         let start = if warm { Start::Warm } else { Start::Cold };
         let (ws, q) = (&mut self.ws, &self.q);
         let row = py
             .detach(|| {
                 let report = ws.solve_readings_from(q, start)?;
-                Ok::<_, ModelError>(Row::take(ws, report))
+                Ok::<_, ModelError>(Row::take(ws, report, false))
             })
             .map_err(|e| readings_err(py, e, None))?;
+        self.current.clone_from(&self.q);
         row_dict(py, &row)
+    }
+
+    /// Set the readings (m, in `columns` order) that the next `solve()` without
+    /// readings solves, warm from the current state; checked now (`ReadingsError`
+    /// as `solve`), nothing is solved yet.
+    fn set_readings(&mut self, py: Python<'_>, readings: &Bound<'_, PyAny>) -> PyResult<()> {
+        let p = self.current.len();
+        read_f64s(readings, &mut self.q, "readings", || {
+            format!("{p} readings (m)")
+        })?;
+        self.ws
+            .validate_readings(&self.q)
+            .map_err(|e| readings_err(py, e, None))?;
+        self.current.clone_from(&self.q);
+        Ok(())
+    }
+
+    /// The readings `solve()` without readings solves (m, `columns` order).
+    #[getter]
+    fn readings<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.current)
+    }
+
+    /// Replace the external loads of the next solves on the live solver, keeping its
+    /// warm start (no new scene, no cold reference solve): `loads` has the layout of
+    /// the scene's `[loads]` table (`gravity_m_s2`, `point`, `tensions_n`); keys not
+    /// given keep their values. Driven and passive tendons keep tension 0 (theirs
+    /// follow from the readings). Each tendon's free length at reading 0 stays the
+    /// one fixed at construction (a payload does not change a tendon's length), so
+    /// this is the same robot carrying other loads, not `TendonSolver` of a scene
+    /// with these loads (whose reference solve would fix other free lengths). A bad
+    /// value raises `SceneError` naming the field and changes nothing.
+    fn set_loads(&mut self, py: Python<'_>, loads: &Bound<'_, PyDict>) -> PyResult<()> {
+        let merged = merged_loads(py, self.ws.workspace().loads(), loads)?;
+        self.ws
+            .set_loads(&merged)
+            .map_err(|e| from_model_error(py, e))
+    }
+
+    /// The external loads in effect, as a dict with the layout of the `[loads]` table.
+    #[getter]
+    fn loads<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        loads_dict(py, self.ws.workspace().loads())
     }
 
     /// Solve every row of a 2-D float array `rows` (n, p) in order, warm-started
     /// from row to row (and from the previous call), with the GIL released for the
     /// whole batch. Returns {tip (n, 3), section_tips (n, k, 3), tensions (n, p),
     /// taut (n, p) bool, converged (n,) bool, status [n], iterations (n,),
-    /// diagnosis [n] (why a row did not converge, None for a converged one)}. A bad
-    /// reading raises `ReadingsError` with `field` `rows[i].readings[j] (column)`;
-    /// the rows before it are solved and the solver keeps their state.
+    /// diagnosis [n] (why a row did not converge, None for a converged one)}; with
+    /// `shapes=True` also `s` (m,) arc length of the stations (m) and `shapes`
+    /// (n, m, 3), the backbone of every row (m; a row that did not converge has its
+    /// failed attempt's). A bad reading raises `ReadingsError` with `field`
+    /// `rows[i].readings[j] (column)`; the rows before it are solved and the solver
+    /// keeps their state. `rows` that numpy cannot make a 2-D float array of `p`
+    /// columns raise `TypeError` (`ValueError` for a wrong column count) saying the
+    /// shape expected and the one given.
+    #[pyo3(signature = (rows, shapes = false))]
     fn solve_many<'py>(
         &mut self,
         py: Python<'py>,
-        rows: PyReadonlyArray2<'py, f64>,
+        rows: &Bound<'py, PyAny>,
+        shapes: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let shape = rows.shape();
-        let (n, p) = (shape[0], shape[1]);
-        if p != self.q.len() {
+        let p = self.current.len();
+        let rows_in = read_rows(py, rows, p, "rows", &format!("{p} readings (m)"))?;
+        if rows_in.cols != p {
             return Err(readings_err(
                 py,
                 ModelError::Invalid {
                     field: "rows".into(),
                     why: format!(
-                        "{p} columns for {} displacement-driven tendons",
-                        self.q.len()
+                        "{} columns for {p} displacement-driven tendons ({})",
+                        rows_in.cols, rows_in.shape_msg
                     ),
                 },
                 None,
             ));
         }
-        let data: Vec<f64> = rows.as_array().iter().copied().collect();
+        let (n, data) = (rows_in.n, rows_in.data);
         let ws = &mut self.ws;
         let solved = py.detach(|| {
             let mut out: Vec<Row> = Vec::with_capacity(n);
             for (i, q) in data.chunks_exact(p.max(1)).take(n).enumerate() {
                 let report = ws.solve_readings(q).map_err(|e| in_row(e, i))?;
-                out.push(Row::take(ws, report));
+                out.push(Row::take(ws, report, shapes));
             }
             Ok::<_, ModelError>(out)
         });
         let solved = solved.map_err(|e| readings_err(py, e, None))?;
+        if n > 0 {
+            self.current.copy_from_slice(&data[(n - 1) * p..n * p]);
+        }
         let k = self.ws.workspace().robot().sections().len();
         let d = PyDict::new(py);
         let flat =
@@ -284,6 +363,29 @@ impl TendonSolver {
         d.set_item("iterations", PyArray1::from_vec(py, iterations))?;
         let diagnosis: Vec<Option<String>> = solved.iter().map(|r| r.diagnosis.clone()).collect();
         d.set_item("diagnosis", diagnosis)?;
+        if shapes {
+            // every row samples the same stations (the integration grid of the
+            // robot); a row that did not would make the stack ragged
+            let s: Vec<f64> = solved
+                .first()
+                .and_then(|r| r.shape.as_ref())
+                .map(|(s, _)| s.clone())
+                .unwrap_or_default();
+            let m = s.len();
+            let mut all = Vec::with_capacity(n * m * 3);
+            for (i, r) in solved.iter().enumerate() {
+                let (si, ri) = r.shape.as_ref().map(|(a, b)| (a, b)).unwrap_or((&s, &s));
+                if si.len() != m {
+                    return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                        "rows[{i}]: {} stations where row 0 has {m}: the shapes do not stack",
+                        si.len()
+                    )));
+                }
+                all.extend_from_slice(ri);
+            }
+            d.set_item("s", PyArray1::from_vec(py, s))?;
+            d.set_item("shapes", PyArray1::from_vec(py, all).reshape([n, m, 3])?)?;
+        }
         Ok(d)
     }
 
@@ -318,9 +420,10 @@ impl TendonSolver {
         let solved = py
             .detach(|| {
                 let report = ws.solve_readings(&row.readings_m)?;
-                Ok::<_, ModelError>(Row::take(ws, report))
+                Ok::<_, ModelError>(Row::take(ws, report, false))
             })
             .map_err(|e| readings_err(py, e, Some(row.line)))?;
+        self.current.clone_from(&row.readings_m);
         let d = row_dict(py, &solved)?;
         d.set_item("line", row.line)?;
         d.set_item("t_s", row.t_s)?;
@@ -332,12 +435,26 @@ impl TendonSolver {
         Ok(Some(d))
     }
 
-    /// The full solution of the last solve (the dict of `cablesense.solve`: samples
-    /// `s`, `r`, `R`, tip, section tips, cable lengths, shooting report).
+    /// The full solution of the last solve: the dict of `cablesense.solve` (samples
+    /// `s`, `r`, `R`, tip, section tips, cable lengths) whose `report` is the row's
+    /// report as `solve` returns it (status, converged, iterations, residual_m,
+    /// forward_solves, slack, and diagnosis when it did not converge): a row solves
+    /// shape and tensions together, so the inner shooting workspace has no report of
+    /// its own for it. After a row that did not converge, the failed attempt's shape.
     fn solution<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let ws = &mut self.ws;
-        let sol = py.detach(|| ws.workspace_mut().solution());
-        solution_dict(py, &sol)
+        let (sol, report, why) = py.detach(|| {
+            let report = *ws.report();
+            let why = (!report.status.is_converged()).then(|| ws.diagnose().to_string());
+            (ws.workspace_mut().solution(), report, why)
+        });
+        let d = solution_dict(py, &sol)?;
+        let rep = report_dict(py, &report)?;
+        if let Some(why) = why {
+            rep.set_item("diagnosis", why)?;
+        }
+        d.set_item("report", rep)?;
+        Ok(d)
     }
 
     fn __repr__(&self) -> String {

@@ -21,6 +21,16 @@ Calibration from a recording (the scene's [calibration] table maps the columns):
     # the hardware validation: a calibrated scene predicting a held-out recording
     cablesense.predict_recording(fit["scene"], "val.csv")["errors"]["mean_removed"]
 
+Scenes are values: `scene.to_toml()` / `to_dict()` / `to_json()` and back, pickling
+and `copy.deepcopy` (so they travel to worker processes, e.g. a Dask cluster);
+`scene.with_loads({...})` is a copy with other loads. Live solvers take new loads
+and readings without a cold start: `Solver.set_loads`, `TendonSolver.set_loads`,
+`TendonSolver.set_readings`. The embedded demo data: `Scene.from_file("demo:NAME")`
+or `cablesense.demo` (names, text, scene).
+
+The dicts the calls return are typed for checkers (`cablesense.Solution`,
+`TendonRow`, `TendonBatch`, `Estimate`, ...: TypedDicts, plain dicts at run time).
+
 The thesis validation (data embedded in the library):
 
     v = cablesense.validate_thesis("4.3")  # rows, per-point and per-cable summaries
@@ -45,9 +55,37 @@ from ._cablesense import (
     validate_thesis,
     __version__,
 )
+from ._types import (
+    CalibrationReport,
+    Estimate,
+    RecordingPrediction,
+    Solution,
+    SolveReport,
+    TendonBatch,
+    TendonLine,
+    TendonReport,
+    TendonRow,
+    TendonSolution,
+    ThesisComparison,
+    Tick,
+)
+from . import demo
 
 __all__ = [
     "CalibrationError",
+    "CalibrationReport",
+    "Estimate",
+    "RecordingPrediction",
+    "Solution",
+    "SolveReport",
+    "TendonBatch",
+    "TendonLine",
+    "TendonReport",
+    "TendonRow",
+    "TendonSolution",
+    "ThesisComparison",
+    "Tick",
+    "demo",
     "Estimator",
     "ReadingsError",
     "Scene",

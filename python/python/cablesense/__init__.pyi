@@ -1,12 +1,62 @@
 """Type stubs of the cablesense extension (see __init__.py for the overview)."""
 
 from os import PathLike
-from typing import Any, Dict, List, Optional, Sequence, Union
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import Self
+
+from . import demo as demo
+from ._types import CalibrationReport as CalibrationReport
+from ._types import Estimate as Estimate
+from ._types import RecordingPrediction as RecordingPrediction
+from ._types import Solution as Solution
+from ._types import SolveReport as SolveReport
+from ._types import TendonBatch as TendonBatch
+from ._types import TendonLine as TendonLine
+from ._types import TendonReport as TendonReport
+from ._types import TendonRow as TendonRow
+from ._types import TendonSolution as TendonSolution
+from ._types import ThesisComparison as ThesisComparison
+from ._types import Tick as Tick
 
 __version__: str
+
+__all__ = [
+    "CalibrationError",
+    "CalibrationReport",
+    "Estimate",
+    "RecordingPrediction",
+    "Solution",
+    "SolveReport",
+    "TendonBatch",
+    "TendonLine",
+    "TendonReport",
+    "TendonRow",
+    "TendonSolution",
+    "ThesisComparison",
+    "Tick",
+    "demo",
+    "Estimator",
+    "ReadingsError",
+    "Scene",
+    "SceneError",
+    "Solver",
+    "TendonSolver",
+    "calibrate",
+    "predict_recording",
+    "solve",
+    "validate_thesis",
+    "__version__",
+]
+
+#: A row of floats: a sequence or a 1-D array of a real dtype.
+_Floats = Union[Sequence[float], npt.NDArray[np.floating[Any]], npt.NDArray[np.integer[Any]]]
+#: Rows of floats: anything ``numpy.asarray(x, float64)`` makes a 2-D array of.
+_Rows = Union[Sequence[Sequence[float]], npt.NDArray[np.floating[Any]], npt.NDArray[np.integer[Any]]]
+#: A dict with the layout of the scene's ``[loads]`` table.
+_Loads = Dict[str, Any]
 
 class SceneError(ValueError):
     """A scene could not be read or is invalid."""
@@ -31,73 +81,78 @@ class CalibrationError(ValueError):
     field: Optional[str]
     """Scene field path when a parameter value makes the scene invalid."""
 
+@final
 class Scene:
-    """A validated scene: robot, loads, numerics and optional ``[estimate]``."""
+    """A validated scene: robot, loads, numerics and optional ``[estimate]``.
+
+    A value: equal scenes compare equal; it converts to TOML, JSON and a dict and
+    back exactly, pickles and deep-copies."""
 
     @staticmethod
-    def from_file(path: Union[str, PathLike[str]]) -> Scene: ...
+    def from_file(path: Union[str, PathLike[str]]) -> Scene:
+        """A ``.toml`` or ``.json`` file, or an embedded ``demo:NAME``."""
     @staticmethod
     def from_toml(text: str) -> Scene: ...
     @staticmethod
+    def from_json(text: str) -> Scene: ...
+    @staticmethod
     def from_dict(d: Dict[str, Any]) -> Scene: ...
+    def to_toml(self) -> str: ...
+    def to_json(self) -> str: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def with_loads(self, loads: _Loads) -> Scene:
+        """A copy with the given keys of the ``[loads]`` table replaced."""
+    def __reduce__(self) -> Tuple[Any, Tuple[str]]: ...
+    def __copy__(self) -> Scene: ...
+    def __deepcopy__(self, memo: Any, /) -> Scene: ...
+    def __eq__(self, other: object, /) -> bool: ...
+    def __ne__(self, other: object, /) -> bool: ...
     @property
     def description(self) -> str: ...
     @property
     def cable_names(self) -> List[str]: ...
 
-# Solution dict (SI units):
-#   s (n,) m; r (n, 3) m; R (n, 3, 3) rotations; tip (3,) m; section_tips (k, 3) m;
-#   cable_lengths (c,) m from the base plate;
-#   report: {status, converged, iterations, residual, rhs_evals, jacobian_evals,
-#            continuation_steps[, diagnosis]}; `diagnosis` (str) only when not
-#            converged: why, with the loads that bend the rod most named by their
-#            scene field (`Workspace::diagnose`)
-Solution = Dict[str, Any]
-
 def solve(scene: Scene) -> Solution:
     """Cold forward solve with the scene's loads (the GIL is released)."""
 
+@final
 class Solver:
     """Keeps its workspace: solves after the first start warm."""
 
-    def __init__(self, scene: Scene) -> None: ...
+    def __new__(cls, scene: Scene) -> Self: ...
     def solve(self, warm: bool = True) -> Solution: ...
+    def set_loads(self, loads: _Loads) -> None:
+        """New loads for the next solves, keeping the warm start (keys not given
+        keep their values)."""
+    @property
+    def loads(self) -> Dict[str, Any]: ...
 
-# Estimate dict: names [p]; values (p,); std_dev (p,); covariance (p, p);
-#   status (converged | unobservable | max_iterations | time_budget | stalled |
-#   forward_failed | no_data); fit (good | poor | untestable); rms_sigma; redundancy;
-#   rank; tip (3,) m; predicted (c,) m; iterations; elapsed_s
-Estimate = Dict[str, Any]
-
+@final
 class Estimator:
     """The scene's ``[estimate]`` problem; ``tick`` releases the GIL."""
 
-    def __init__(self, scene: Scene) -> None: ...
+    def __new__(cls, scene: Scene) -> Self: ...
     @property
     def names(self) -> List[str]: ...
+    @overload
     def tick(
         self,
-        changes: Union[Sequence[float], npt.NDArray[np.float64]],
-        sigma: Optional[Union[Sequence[float], npt.NDArray[np.float64]]] = None,
-        snapshot: bool = True,
+        changes: _Floats,
+        sigma: Optional[_Floats] = None,
+        snapshot: Literal[True] = True,
     ) -> Estimate:
-        """One sample: cable length changes (m; NaN = missing), optional noise (m).
-        ``snapshot=False``: only {status, values, covariance (tick-end sensitivities),
-        statistics_exact, tip}, without the ~16 us estimate snapshot (control loops)."""
+        """One sample: cable length changes (m; NaN = missing), optional noise (m)."""
+    @overload
+    def tick(self, changes: _Floats, sigma: Optional[_Floats], snapshot: Literal[False]) -> Tick: ...
+    @overload
+    def tick(self, changes: _Floats, *, snapshot: Literal[False]) -> Tick: ...
     def time_ticks(
         self, samples: npt.NDArray[np.float64], count: int, snapshot: bool = False
     ) -> npt.NDArray[np.float64]:
         """Seconds per tick of ``count`` ticks run in Rust alone over the rows of
-        ``samples`` (n, c) (with ``snapshot``: each plus the estimate snapshot that
-        ``tick`` returns), for measuring the binding's overhead."""
+        ``samples`` (n, c), for measuring the binding's overhead."""
 
-# Tendon row dict (SI units): tip (3,) m; section_tips (k, 3) m; tensions (p,) N of
-#   the displacement-driven tendons; taut (p,) bool; lengths (c,) m of every cable;
-#   report: {status, converged, iterations, residual_m, forward_solves, slack
-#            [, diagnosis]} (`diagnosis`, str, only when not converged).
-#   solve_line adds line, t_s, readings (p,) m and measured_tip (3,) m or None.
-TendonRow = Dict[str, Any]
-
+@final
 class TendonSolver:
     """Servo readings of displacement-driven tendons in, shape and tensions out.
 
@@ -105,7 +160,7 @@ class TendonSolver:
     order); the GIL is released inside every solve.
     """
 
-    def __init__(self, scene: Scene) -> None: ...
+    def __new__(cls, scene: Scene) -> Self: ...
     @property
     def columns(self) -> List[str]:
         """Readings column of each driven tendon (the order of ``solve``)."""
@@ -117,31 +172,31 @@ class TendonSolver:
     @property
     def rest_free_lengths(self) -> npt.NDArray[np.float64]:
         """Free length ``L0`` of each driven tendon at reading 0 (m)."""
+    @property
+    def readings(self) -> npt.NDArray[np.float64]:
+        """The readings ``solve()`` without readings solves (m)."""
+    @property
+    def loads(self) -> Dict[str, Any]: ...
     def set_budget(
         self, max_passes: Optional[int] = None, time_budget_s: Optional[float] = None
     ) -> None:
         """Budget of every later solve: rod evaluations and wall time (s) per row
         (None: no limit). A row that runs out has report status
         ``"budget_exhausted"`` and is rolled back like any failed row."""
-    def solve(
-        self,
-        readings: Union[Sequence[float], npt.NDArray[np.float64]],
-        warm: bool = True,
-    ) -> TendonRow:
+    def set_loads(self, loads: _Loads) -> None:
+        """New external loads for the next solves, keeping the warm start."""
+    def set_readings(self, readings: _Floats) -> None:
+        """Readings (m) for the next ``solve()`` without readings; checked now."""
+    def solve(self, readings: Optional[_Floats] = None, warm: bool = True) -> TendonRow:
         """One row of readings (m, in ``columns`` order)."""
-    def solve_many(self, rows: npt.NDArray[np.float64]) -> Dict[str, Any]:
-        """Rows (n, p) in order, warm-started: tip (n, 3), section_tips (n, k, 3),
-        tensions (n, p), taut (n, p), converged (n,), status [n], iterations (n,),
-        diagnosis [n] (str why a row did not converge, None when it did)."""
-    def solve_line(self, line_no: int, text: str) -> Optional[TendonRow]:
+    def solve_many(self, rows: _Rows, shapes: bool = False) -> TendonBatch:
+        """Rows (n, p) in order, warm-started (``shapes=True``: also the backbone of
+        every row, ``shapes`` (n, m, 3), and ``s`` (m,))."""
+    def solve_line(self, line_no: int, text: str) -> Optional[TendonLine]:
         """One line of a readings file (CSV with header, or JSON lines); None for a
         header, comment or blank line."""
-    def solution(self) -> Solution:
-        """Full solution of the last solve (samples, tips, cable lengths)."""
-
-# Calibration report (the layout of `cablesense calibrate`'s report.json) plus
-#   scene: the calibrated Scene.
-CalibrationReport = Dict[str, Any]
+    def solution(self) -> TendonSolution:
+        """Full solution of the last solve, with the row's report."""
 
 def calibrate(
     scene: Scene,
@@ -154,11 +209,8 @@ def calibrate(
     """Fit the scene's ``[calibration]`` parameters (plus ``params`` paths), capture
     frame and marker offset to the recording ``train``; predict ``val`` too."""
 
-def validate_thesis(table: str, fitted: bool = True) -> Dict[str, Any]:
-    """Compare the model with a thesis table (4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc):
-    {table, title, ref_length_m, all_converged, rows, points, lengths}."""
+def validate_thesis(table: str, fitted: bool = True) -> ThesisComparison:
+    """Compare the model with a thesis table (4.1, 4.2, 4.3, 4.3m, 4.4, 4.5, 4.5acc)."""
 
-def predict_recording(scene: Scene, recording: Union[str, PathLike[str]]) -> Dict[str, Any]:
-    """Predict every row of a recording with a (calibrated) scene, compared with its
-    marker columns in the base frame: {lines, predicted_m (n, 3), measured_m (n, 3),
-    errors {raw, mean_removed}}."""
+def predict_recording(scene: Scene, recording: Union[str, PathLike[str]]) -> RecordingPrediction:
+    """Predict every row of a recording with a (calibrated) scene."""
