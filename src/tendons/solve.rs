@@ -523,6 +523,7 @@ impl TendonWorkspace {
             // debug builds check it (NaN there would reach the results)
             if cfg!(debug_assertions) {
                 self.ws.poison_uncopied();
+                self.joint.poison_scratch();
             }
         }
     }
