@@ -142,3 +142,36 @@ fn check(scene: Scene, expected_params: usize) {
         }
     }
 }
+
+/// The scene's checks of the second-order term: a negative one (a toe region) needs
+/// the linear series spring, a non-finite one is refused; each error names the key.
+#[test]
+fn a_negative_second_order_term_needs_the_linear_series_spring() {
+    let text = std::fs::read_to_string(format!(
+        "{}/data/calibration/ftdcr_v4_calibrated.toml",
+        dir()
+    ))
+    .unwrap();
+    let spring = "series_stiffness_n_per_m = 2676.9397954155406\n";
+    assert!(text.contains(spring), "the stored series spring moved");
+    let with = |b: &str, keep_spring: bool| {
+        let line = format!("{spring}series_quadratic_m_per_n2 = {b}\n");
+        let t = text.replace(spring, &line);
+        let t = if keep_spring {
+            t
+        } else {
+            t.replace(spring, "")
+        };
+        let scene = Scene::from_toml_str(&t).expect("parses");
+        scene.validate()
+    };
+    assert!(with("-2e-5", true).is_ok());
+    assert!(with("3e-5", false).is_ok());
+    for (b, keep) in [("-2e-5", false), ("nan", true), ("inf", true)] {
+        let e = match with(b, keep) {
+            Ok(_) => panic!("b = {b} (spring kept: {keep}) was accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("series_quadratic_m_per_n2"), "b = {b}: {e}");
+    }
+}
