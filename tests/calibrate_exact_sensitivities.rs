@@ -22,6 +22,7 @@ use cablesense::calibrate::{
     finite_differences, CalibrationModel, CalibrationSettings, ColumnMap, FitParam, Recording,
     SceneModel, Sensitivities,
 };
+use cablesense::scene::calibration::ParamSpec;
 use cablesense::validation::ParamPath;
 use cablesense::Scene;
 
@@ -29,17 +30,52 @@ fn dir() -> &'static str {
     env!("CARGO_MANIFEST_DIR")
 }
 
-#[test]
-fn exact_sensitivities_equal_central_differences_on_ftdcr_v4() {
-    // solved to round-off: the central differences' noise is the solves' tolerance
-    // (the stored scene's own 1e-4 / 1e-7 m would swamp them)
-    let scene = crate::common::default_tolerances(
+/// The stored FTDCR v4 calibration, solved to round-off: the central differences'
+/// noise is the solves' tolerance (the stored scene's own 1e-4 / 1e-7 m would
+/// swamp them).
+fn stored() -> Scene {
+    crate::common::default_tolerances(
         Scene::load(format!(
             "{}/data/calibration/ftdcr_v4_calibrated.toml",
             dir()
         ))
         .unwrap(),
-    );
+    )
+}
+
+#[test]
+fn exact_sensitivities_equal_central_differences_on_ftdcr_v4() {
+    check(stored(), 8);
+}
+
+/// The same with the series spring's second-order term (`e(T) = T/k_s + b T^2`,
+/// `TendonMechanics::covered`) set and freed: its tangent compliance enters `F_z`
+/// (the exact side) and both sides' residuals. Seen (b = 4e-5 m/N^2, about 30 % of
+/// the spring's extension at 3 N, and its negative, a toe region).
+#[test]
+fn exact_sensitivities_with_a_nonlinear_series_spring() {
+    for b in [4e-5, -4e-5] {
+        let mut scene = stored();
+        scene
+            .robot
+            .tendons
+            .as_mut()
+            .unwrap()
+            .series_quadratic_m_per_n2 = Some(b);
+        let cal = scene.calibration.as_mut().unwrap();
+        cal.params.push(ParamSpec {
+            path: "robot/tendons/series_quadratic_m_per_n2".into(),
+            min: Some(-1e-3),
+            max: Some(1e-3),
+            scale: Some(1e-4),
+            ..ParamSpec::default()
+        });
+        println!("b = {b:e} m/N^2");
+        check(scene, 9);
+    }
+}
+
+fn check(scene: Scene, expected_params: usize) {
     let spec = scene.calibration.clone().unwrap();
     let map = ColumnMap::from_spec(&spec);
     let all = Recording::load(format!("{}/data/hardware/ftdcr_v4/train.csv", dir()), &map).unwrap();
@@ -57,7 +93,7 @@ fn exact_sensitivities_equal_central_differences_on_ftdcr_v4() {
     let values = model.values().to_vec();
     let steps: Vec<f64> = params.iter().map(|p| settings.fd_step * p.scale).collect();
     let n = values.len();
-    assert_eq!(n, 8);
+    assert_eq!(n, expected_params);
 
     let mut exact = Sensitivities::default();
     model
@@ -104,5 +140,38 @@ fn exact_sensitivities_equal_central_differences_on_ftdcr_v4() {
                 f[at * n + k]
             );
         }
+    }
+}
+
+/// The scene's checks of the second-order term: a negative one (a toe region) needs
+/// the linear series spring, a non-finite one is refused; each error names the key.
+#[test]
+fn a_negative_second_order_term_needs_the_linear_series_spring() {
+    let text = std::fs::read_to_string(format!(
+        "{}/data/calibration/ftdcr_v4_calibrated.toml",
+        dir()
+    ))
+    .unwrap();
+    let spring = "series_stiffness_n_per_m = 2676.9397954155406\n";
+    assert!(text.contains(spring), "the stored series spring moved");
+    let with = |b: &str, keep_spring: bool| {
+        let line = format!("{spring}series_quadratic_m_per_n2 = {b}\n");
+        let t = text.replace(spring, &line);
+        let t = if keep_spring {
+            t
+        } else {
+            t.replace(spring, "")
+        };
+        let scene = Scene::from_toml_str(&t).expect("parses");
+        scene.validate()
+    };
+    assert!(with("-2e-5", true).is_ok());
+    assert!(with("3e-5", false).is_ok());
+    for (b, keep) in [("-2e-5", false), ("nan", true), ("inf", true)] {
+        let e = match with(b, keep) {
+            Ok(_) => panic!("b = {b} (spring kept: {keep}) was accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("series_quadratic_m_per_n2"), "b = {b}: {e}");
     }
 }

@@ -291,6 +291,7 @@ impl ReadingsModel {
                 self.ws.driven(),
                 &mech,
                 |ti| free0[ti] - (q0[ti] - mech[ti].zero_offset_m),
+                &st.t,
                 &st.taut,
                 lu.matrix_mut(),
             );

@@ -683,6 +683,7 @@ impl IkWorkspace {
                     free0[k] - (q[k] - mech[k].zero_offset_m)
                 }
             },
+            &self.t,
             &self.taut_tmp,
             self.lu.matrix_mut(),
         );

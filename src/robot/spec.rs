@@ -518,9 +518,16 @@ impl RobotSpec {
             if let Some(t) = &c.tendon {
                 t.validate(&format!("{f}.tendon"))?;
             }
-            if c.actuation == Actuation::Displacement
-                && c.mechanics(self.tendons.as_ref()).stiffness_n.is_none()
+            let merged = c.mechanics(self.tendons.as_ref());
+            if merged.series_quadratic_m_per_n2.is_some_and(|b| b < 0.0)
+                && merged.series_stiffness_n_per_m.is_none()
             {
+                return Err(ModelError::Invalid {
+                    field: format!("{f}.tendon.series_quadratic_m_per_n2"),
+                    why: "a negative second-order term (a toe region) needs the linear series spring series_stiffness_n_per_m (N/m), here or in [robot.tendons]: without one the extension would fall as the tension grows".into(),
+                });
+            }
+            if c.actuation == Actuation::Displacement && merged.stiffness_n.is_none() {
                 return Err(ModelError::Invalid {
                     field: format!("{f}.tendon.stiffness_n"),
                     why: "a displacement-driven tendon needs its axial stiffness EA_t (N; `inf` for an inextensible tendon), here or in [robot.tendons]".into(),

@@ -39,6 +39,14 @@ pub struct TendonSpec {
     /// outside the robot and of the servo horn.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub series_stiffness_n_per_m: Option<f64>,
+    /// Second-order term `b` of the series spring (m/N^2), any finite sign; default
+    /// 0 (the linear spring). The spring's extension is `e(T) = T/k_s + b T^2`
+    /// ([`TendonMechanics::series_extension`]): `b > 0` softens it as the tension
+    /// grows, `b < 0` is a toe region (soft at low tension, stiffening to the linear
+    /// region beyond `T* = 1/(4 k_s |b|)`, where its stiffness is `2 k_s`). A
+    /// negative value needs `series_stiffness_n_per_m`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub series_quadratic_m_per_n2: Option<f64>,
     /// Tension at reading `q = 0` (N), >= 0; default 0 (just taut). It fixes the
     /// free length `L0` (see [`crate::tendons::TendonWorkspace`]).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -56,6 +64,9 @@ impl TendonSpec {
             series_stiffness_n_per_m: self
                 .series_stiffness_n_per_m
                 .or(defaults.series_stiffness_n_per_m),
+            series_quadratic_m_per_n2: self
+                .series_quadratic_m_per_n2
+                .or(defaults.series_quadratic_m_per_n2),
             pretension_n: self.pretension_n.or(defaults.pretension_n),
             zero_offset_m: self.zero_offset_m.or(defaults.zero_offset_m),
         }
@@ -78,6 +89,9 @@ impl TendonSpec {
                     value: k,
                 });
             }
+        }
+        if let Some(b) = self.series_quadratic_m_per_n2 {
+            ModelError::finite(format!("{field}.series_quadratic_m_per_n2"), b)?;
         }
         if let Some(t) = self.pretension_n {
             ModelError::non_negative(format!("{field}.pretension_n"), t)?;
@@ -250,12 +264,36 @@ mod tests {
 }
 
 /// Resolved mechanics of one tendon (SI units).
+///
+/// A taut tendon of free length `L_f` at tension `T` covers the path
+/// `L_f (1 + s T/EA_t) + e(T)` ([`TendonMechanics::covered`]; `s` the chords' mean
+/// capstan factor, 1 without friction), with the series spring's extension
+///
+/// ```text
+/// e(T) = T/k_s + b tau (2T - tau),   tau = clamp(T, 0, T*),
+/// T* = 1/(4 k_s |b|) when b < 0, else infinite
+/// ```
+///
+/// that is `T/k_s + b T^2` on `0 <= T <= T*`, continued linearly (C1) beyond `T*`
+/// and below 0 (a converged tension is >= 0; iterates may not be). `b = 0` is the
+/// linear spring, bit for bit. The quadratic is the second-order Taylor term of a
+/// smooth load-extension curve: `b < 0` the "toe" of a braided or twisted line,
+/// whose crimped fibres straighten and are recruited as the load grows (stiffening
+/// to a linear region; Kastelic, Palley & Baer, J. Biomech. 13 (1980) 887-893, the
+/// crimp model of the toe of tendon's stress-strain curve; a wire rope's or braided
+/// line's "constructional elongation" on top of its material's linear one: Carl Stahl
+/// Technocables, "Wire rope science: elongation"), `b > 0` a lead or horn
+/// that yields more as the load grows (a softening spring). The tangent compliance
+/// `de/dT = 1/k_s + 2 b tau` is `>= 1/(2 k_s) > 0` for every `T`, so the covered
+/// length increases with the tension whatever the sign of `b`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TendonMechanics {
     /// Axial stiffness `EA_t` (N); `inf` = inextensible.
     pub stiffness_n: f64,
     /// Series spring at the actuator (N/m); `inf` = none.
     pub series_stiffness_n_per_m: f64,
+    /// Second-order term `b` of the series spring's extension (m/N^2); 0 = linear.
+    pub series_quadratic_m_per_n2: f64,
     /// Tension at reading 0 (N).
     pub pretension_n: f64,
     /// Encoder reading at `q = 0` (m).
@@ -268,26 +306,160 @@ impl TendonMechanics {
         Some(Self {
             stiffness_n: spec.stiffness_n?,
             series_stiffness_n_per_m: spec.series_stiffness_n_per_m.unwrap_or(f64::INFINITY),
+            series_quadratic_m_per_n2: spec.series_quadratic_m_per_n2.unwrap_or(0.0),
             pretension_n: spec.pretension_n.unwrap_or(0.0),
             zero_offset_m: spec.zero_offset_m.unwrap_or(0.0),
         })
     }
 
-    /// Compliance `dl/dT` of the taut tendon at free length `free` (m/N), with
-    /// `stretch` the length-weighted mean tension factor of its chords (1 without
-    /// friction).
+    /// Linear compliance `dl/dT` at zero tension of the taut tendon at free length
+    /// `free` (m/N), with `stretch` the length-weighted mean tension factor of its
+    /// chords (1 without friction): `free s/EA_t + 1/k_s`. The tangent at tension
+    /// `T` adds the series spring's second-order term
+    /// ([`TendonMechanics::tangent_compliance`]).
     pub fn compliance(&self, free: f64, stretch: f64) -> f64 {
         free * stretch / self.stiffness_n + 1.0 / self.series_stiffness_n_per_m
     }
 
-    /// Path length (m) a taut tendon of free length `free` covers at tension `t`.
-    pub fn covered(&self, free: f64, t: f64, stretch: f64) -> f64 {
-        free + t * self.compliance(free, stretch)
+    /// Tension (N) where a negative second-order term's quadratic ends (struct
+    /// docs): `1/(4 k_s |b|)`; infinite for `b >= 0`.
+    fn toe_end(&self) -> f64 {
+        let b = self.series_quadratic_m_per_n2;
+        if b < 0.0 {
+            0.25 / (self.series_stiffness_n_per_m * -b)
+        } else {
+            f64::INFINITY
+        }
     }
 
-    /// Free length `L0` (m) from the reference path `l_ref` at the pretension.
+    /// Second-order part of the series spring's extension at tension `t` (m):
+    /// `b tau (2t - tau)`, `tau = clamp(t, 0, T*)` (struct docs); 0 when `b = 0`.
+    pub fn series_extension_nonlinear(&self, t: f64) -> f64 {
+        let b = self.series_quadratic_m_per_n2;
+        if b == 0.0 {
+            return 0.0;
+        }
+        let tau = t.clamp(0.0, self.toe_end());
+        b * tau * (2.0 * t - tau)
+    }
+
+    /// The series spring's extension `e(T)` (m) at tension `t` (struct docs).
+    pub fn series_extension(&self, t: f64) -> f64 {
+        t / self.series_stiffness_n_per_m + self.series_extension_nonlinear(t)
+    }
+
+    /// Tangent compliance `d covered / dT` (m/N) at free length `free`, tension `t`
+    /// and mean tension factor `stretch`: [`TendonMechanics::compliance`] plus the
+    /// second-order term's `2 b tau` (exact, the derivative of
+    /// [`TendonMechanics::covered`] in `t`).
+    pub fn tangent_compliance(&self, free: f64, t: f64, stretch: f64) -> f64 {
+        let c = self.compliance(free, stretch);
+        let b = self.series_quadratic_m_per_n2;
+        if b == 0.0 {
+            return c;
+        }
+        c + 2.0 * b * t.clamp(0.0, self.toe_end())
+    }
+
+    /// Path length (m) a taut tendon of free length `free` covers at tension `t`.
+    pub fn covered(&self, free: f64, t: f64, stretch: f64) -> f64 {
+        let linear = free + t * self.compliance(free, stretch);
+        if self.series_quadratic_m_per_n2 == 0.0 {
+            return linear;
+        }
+        linear + self.series_extension_nonlinear(t)
+    }
+
+    /// Free length `L0` (m) from the reference path `l_ref` at the pretension:
+    /// `L0 = (l_ref - e(T0)) / (1 + T0/EA_t)`.
     pub fn free_length_at_rest(&self, l_ref: f64) -> f64 {
         let t0 = self.pretension_n;
-        (l_ref - t0 / self.series_stiffness_n_per_m) / (1.0 + t0 / self.stiffness_n)
+        let spring = if self.series_quadratic_m_per_n2 == 0.0 {
+            l_ref - t0 / self.series_stiffness_n_per_m
+        } else {
+            l_ref - t0 / self.series_stiffness_n_per_m - self.series_extension_nonlinear(t0)
+        };
+        spring / (1.0 + t0 / self.stiffness_n)
+    }
+}
+
+#[cfg(test)]
+mod spring_tests {
+    use super::*;
+
+    fn mech(b: f64) -> TendonMechanics {
+        TendonMechanics {
+            stiffness_n: 2e4,
+            series_stiffness_n_per_m: 3000.0,
+            series_quadratic_m_per_n2: b,
+            pretension_n: 0.8,
+            zero_offset_m: 0.0,
+        }
+    }
+
+    #[test]
+    fn without_the_second_order_term_the_law_is_the_linear_one_bit_for_bit() {
+        let m = mech(0.0);
+        for (free, t, s) in [(0.2, 0.0, 1.0), (0.19, 3.7, 1.0), (0.21, 11.3, 1.04)] {
+            let linear = free * s / m.stiffness_n + 1.0 / m.series_stiffness_n_per_m;
+            assert_eq!(m.covered(free, t, s), free + t * linear);
+            assert_eq!(m.tangent_compliance(free, t, s), linear);
+        }
+        let t0 = m.pretension_n;
+        assert_eq!(
+            m.free_length_at_rest(0.2),
+            (0.2 - t0 / m.series_stiffness_n_per_m) / (1.0 + t0 / m.stiffness_n)
+        );
+    }
+
+    /// The tangent compliance is the covered length's derivative in the tension (a
+    /// central difference), the extension is `T/k + b T^2` inside the quadratic, the
+    /// covered length grows with the tension on both sides of the toe's end, and the
+    /// rest free length covers the reference path at the pretension.
+    #[test]
+    fn the_tangent_compliance_is_the_derivative_of_the_covered_length() {
+        let k = 3000.0;
+        for b in [4e-5, -2e-5] {
+            let m = mech(b);
+            let t_star = if b < 0.0 {
+                0.25 / (k * -b)
+            } else {
+                f64::INFINITY
+            };
+            // (not at 0 or T*, where the second derivative jumps)
+            for t in [-0.5, 0.3, 1.5, 4.0, 4.2, 9.0] {
+                let (free, s, h) = (0.2, 1.0, 1e-6);
+                let fd = (m.covered(free, t + h, s) - m.covered(free, t - h, s)) / (2.0 * h);
+                let exact = m.tangent_compliance(free, t, s);
+                assert!(
+                    (fd - exact).abs() < 1e-6 * exact,
+                    "b {b} t {t}: {fd} vs {exact}"
+                );
+                assert!(exact >= 0.5 / k, "b {b} t {t}: not monotone ({exact})");
+                if (0.0..=t_star).contains(&t) {
+                    let e = m.series_extension(t);
+                    assert!((e - (t / k + b * t * t)).abs() < 1e-15, "{e}");
+                }
+            }
+            let l0 = m.free_length_at_rest(0.2);
+            let back = m.covered(l0, m.pretension_n, 1.0);
+            assert!((back - 0.2).abs() < 1e-15, "b {b}: {back}");
+        }
+        // (b < 0: the toe ends at 1/(4 k |b|) = 4.17 N, where the stiffness is 2k)
+        let m = mech(-2e-5);
+        let beyond = m.tangent_compliance(0.0, 8.0, 1.0);
+        assert!((beyond - 0.5 / k).abs() < 1e-15, "{beyond}");
+    }
+
+    #[test]
+    fn a_second_order_term_must_be_finite() {
+        for bad in [f64::NAN, f64::INFINITY] {
+            let spec = TendonSpec {
+                series_quadratic_m_per_n2: Some(bad),
+                ..TendonSpec::default()
+            };
+            let e = spec.validate("robot.tendons").unwrap_err().to_string();
+            assert!(e.contains("robot.tendons.series_quadratic_m_per_n2"), "{e}");
+        }
     }
 }

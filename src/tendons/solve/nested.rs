@@ -191,7 +191,12 @@ impl TendonWorkspace {
         let a = self.lu.matrix_mut();
         for i in 0..p {
             let j = self.driven[i];
-            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
+            let (mech, f, mf) = (&self.mech[i], self.free[i], self.mean_factor[i]);
+            let c = if self.taut[i] {
+                mech.tangent_compliance(f, self.t[i], mf)
+            } else {
+                mech.compliance(f, mf)
+            };
             for k in 0..p {
                 a[i * p + k] = if self.taut[i] {
                     -self.sens[j * np + k] + if i == k { c } else { 0.0 }

@@ -53,7 +53,11 @@ impl TendonWorkspace {
                     jb.ts[i] + jb.dz[n + i] < 0.0
                 } else {
                     let j = self.driven[i];
-                    let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
+                    let c = self.mech[i].tangent_compliance(
+                        self.free[i],
+                        jb.ts[i],
+                        self.mean_factor[i],
+                    );
                     let row = &jb.jac_m[j * w..j * w + m];
                     let dl: f64 = row.iter().zip(&jb.dz).map(|(a, b)| a * b).sum();
                     jb.gap0[i] + c * jb.dz[n + i] - dl < 0.0

@@ -55,7 +55,12 @@ impl TendonWorkspace {
             }
             let row = &mut jb.jinv[(n + i) * m..(n + i + 1) * m];
             let j = self.driven[i];
-            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
+            let (mech, f, mf) = (&self.mech[i], self.free[i], self.mean_factor[i]);
+            let c = if self.taut[i] {
+                mech.tangent_compliance(f, self.t[i], mf)
+            } else {
+                mech.compliance(f, mf)
+            };
             let sweep_row = &jb.jac_m[j * w..j * w + m];
             tendon_row(row, n + i, self.taut[i], sweep_row, c, self.geo[i]);
         }

@@ -34,7 +34,13 @@ impl TendonWorkspace {
         for i in 0..p {
             let row = &mut a[(n + i) * m..(n + i + 1) * m];
             let j = self.driven[i];
-            let c = self.mech[i].compliance(self.free[i], self.mean_factor[i]);
+            let (mech, f, mf) = (&self.mech[i], self.free[i], self.mean_factor[i]);
+            // (the tangent at the iterate's tension, where the sweep was taken)
+            let c = if jb.lu_taut[i] {
+                mech.tangent_compliance(f, jb.ts[i], mf)
+            } else {
+                mech.compliance(f, mf)
+            };
             let sweep_row = &jb.jac_m[j * w..j * w + m];
             tendon_row(row, n + i, jb.lu_taut[i], sweep_row, c, self.geo[i]);
         }
