@@ -64,8 +64,9 @@
 //! solves [`CONTINUATION_STEPS`] intermediate targets on the segment from the start
 //! tip to the target, each warm from the last (a homotopy in the target; Allgower &
 //! Georg, *Numerical Continuation Methods*, 1990, ch. 1), within the same budget;
-//! its end is kept when it is closer (lower `phi`) than the first attempt's. On
-//! that case it reaches (2.4 um); the control loop's small steps never need it.
+//! its end is kept when it is closer (lower `phi`) than the first attempt's (a
+//! creeping first attempt then goes on with the budget left). On that case it
+//! reaches; the control loop's small steps rarely need it.
 //!
 //! **Jacobian.** At a converged solve, `F(z; q) = 0` with `z = [x; T]` (scaled
 //! shooting unknowns, tensions): by the implicit function theorem
@@ -82,6 +83,19 @@
 //! `dT/dq` are the tension rows of `dz/dq`. With capstan friction (`mu > 0`) the state
 //! depends on the direction memory, not on `z` alone: the Jacobian is then a central
 //! difference of converged forward solves (`2p` solves).
+//!
+//! **Jacobian updates.** After an accepted step with every tendon taut before and
+//! after (and no friction), the Jacobians are not evaluated again: Broyden's
+//! rank-one update along the step (Broyden, "A class of methods for solving
+//! nonlinear simultaneous equations", Math. Comp. 19, 1965; Nocedal & Wright eq.
+//! 11.24) carries them to the new readings, and into the next call (the next
+//! tick starts where this one ended), as long as the model predicted the step well
+//! (`rho > 0.75`). The exact Jacobian is evaluated again after a poorer step, when
+//! a step from an updated one is rejected (same trust radius), when the active set
+//! changes, and before any conclusion other than `Reached` (a stationary point is
+//! judged on the exact Jacobian only). [`IkReport::jacobians`] counts the
+//! evaluations. On the FTDCR v4's warm ticks an evaluation (dual sweep, `F_z`
+//! factored, 18 tangent passes) costs about 3.4 forward solves.
 //!
 //! **Outcomes** ([`IkStatus`]): `Reached` (tip within [`IkSettings::tolerance_m`], and
 //! the direction within [`IkSettings::angle_tolerance_rad`] when one is given);
@@ -321,8 +335,12 @@ pub struct IkReport {
     pub distance_m: f64,
     /// Angle between the tip axis and the target direction (rad; 0 without one).
     pub angle_rad: f64,
-    /// Gauss-Newton iterations (Jacobians evaluated).
+    /// Gauss-Newton iterations (QP models built from an evaluated or an updated
+    /// Jacobian).
     pub iterations: usize,
+    /// Jacobians evaluated (the exact one, or the friction fallback's differences);
+    /// the other iterations use Broyden's update along the last step.
+    pub jacobians: usize,
     /// Forward solves (trial steps, friction differences).
     pub forward_solves: usize,
     /// Bounded least-squares steps solved (clarabel).
@@ -341,6 +359,7 @@ pub struct IkReport {
 #[derive(Default)]
 struct Counts {
     iterations: usize,
+    jacobians: usize,
     solves: usize,
     qp_solves: usize,
 }
@@ -486,6 +505,12 @@ pub struct IkWorkspace {
     has_state: bool,
     /// First-order measure at the last `build_qp` (see [`IkReport::first_order`]).
     first_order: f64,
+    /// `jp`, `ja`, `jt`, `slack`, `q_lin` hold at the accepted readings, and were
+    /// evaluated there (not updated along a step).
+    jac_valid: bool,
+    jac_exact: bool,
+    /// The last accepted step (m), for the Broyden update.
+    step_m: Vec<f64>,
 }
 
 impl IkWorkspace {
@@ -549,6 +574,9 @@ impl IkWorkspace {
             qp: StepQp::new(p)?,
             has_state: false,
             first_order: f64::NAN,
+            jac_valid: false,
+            jac_exact: false,
+            step_m: vec![0.0; p],
             tw,
         };
         let zero = vec![0.0; p];
@@ -599,6 +627,7 @@ impl IkWorkspace {
         self.q.copy_from_slice(q);
         self.accept_state();
         self.has_state = true;
+        self.jac_valid = false;
         Ok(())
     }
 
@@ -810,6 +839,7 @@ impl IkWorkspace {
         if !self.has_state {
             return None;
         }
+        self.jac_valid = false;
         self.fd_jacobian()
     }
 
@@ -1043,6 +1073,7 @@ impl IkWorkspace {
             self.tw.warm_copy_from(&self.start_ws);
             self.q.copy_from_slice(&self.q0);
             self.accept_state();
+            self.jac_valid = false;
             let tip0 = self.tip;
             for k in 1..=CONTINUATION_STEPS {
                 let f = k as f64 / CONTINUATION_STEPS as f64;
@@ -1062,6 +1093,7 @@ impl IkWorkspace {
                 self.tw.warm_copy_from(&self.end_ws);
                 self.q.copy_from_slice(&self.q_end);
                 self.accept_state();
+                self.jac_valid = false;
                 status = first_status;
                 self.first_order = first_fo;
             } else if !matches!(status, IkStatus::Reached) && self.is_reached(target) {
@@ -1086,6 +1118,7 @@ impl IkWorkspace {
                 d.normalize().dot(&self.axis).clamp(-1.0, 1.0).acos()
             }),
             iterations,
+            jacobians: n.jacobians,
             forward_solves: solves,
             qp_solves,
             objective: st.objective,
@@ -1111,34 +1144,47 @@ impl IkWorkspace {
                 return self.final_status(reached, true);
             }
             n.iterations += 1;
-            self.first_order = f64::NAN;
-            match self.compute_jacobian() {
-                Some(k) => n.solves += k,
-                None => return self.final_status(reached, false),
+            if !self.jac_valid {
+                self.first_order = f64::NAN;
+                match self.compute_jacobian() {
+                    Some(k) => n.solves += k,
+                    None => return self.final_status(reached, false),
+                }
+                n.jacobians += 1;
+                self.jac_valid = true;
+                self.jac_exact = true;
             }
             // trust-region trials at this Jacobian
             let mut outcome = None;
             let mut first = true;
             while outcome.is_none() {
                 self.build_qp(target, delta);
-                if std::mem::take(&mut first) && stalls >= 2 && self.first_order <= FIRST_ORDER_TOL
-                {
-                    // slow progress at a stationary point: the closest tip
-                    outcome = Some(Some(self.final_status(reached, false)));
-                    break;
+                if std::mem::take(&mut first) && stalls >= 2 {
+                    // slow progress: judged on the exact Jacobian
+                    if !self.jac_exact {
+                        self.jac_valid = false;
+                        outcome = Some(None);
+                        break;
+                    }
+                    if reached || self.first_order <= FIRST_ORDER_TOL {
+                        // reached (a secondary objective no longer improving), or
+                        // at a stationary point: the closest tip
+                        outcome = Some(Some(self.final_status(reached, false)));
+                        break;
+                    }
                 }
                 let mut u = std::mem::take(&mut self.u);
                 let ok = self.qp.solve(&mut u);
                 n.qp_solves += 1;
                 self.u = u;
                 if !ok {
-                    outcome = Some(Some(self.final_status(reached, false)));
+                    outcome = Some(self.conclude(reached));
                     break;
                 }
                 let step_m = self.u.iter().fold(0.0f64, |m, v| m.max(v.abs())) / MM;
                 let pred = -self.model();
                 if step_m < st.step_tolerance_m || pred <= 1e-15 * phi.max(1e-300) {
-                    outcome = Some(Some(self.final_status(reached, false)));
+                    outcome = Some(self.conclude(reached));
                     break;
                 }
                 if n.solves >= st.max_forward_solves {
@@ -1180,8 +1226,16 @@ impl IkWorkspace {
                     } else if rho < 0.25 {
                         delta = 0.25 * step_m;
                     }
+                    let updated = self.broyden_update();
                     std::mem::swap(&mut self.q, &mut self.q_trial);
                     self.accept_state();
+                    // the update is trusted while the model predicts well
+                    self.jac_valid = updated && rho > 0.75;
+                    self.jac_exact = false;
+                    if updated {
+                        // all taut: the linearisation point is the readings
+                        self.q_lin.copy_from_slice(&self.q);
+                    }
                     let gain = phi - phi_new;
                     phi = phi_new;
                     if gain < 1e-4 * (phi + gain) {
@@ -1190,11 +1244,16 @@ impl IkWorkspace {
                         stalls = 0;
                     }
                     outcome = Some(None);
+                } else if !self.jac_exact {
+                    // the updated Jacobian's step failed: the exact one, same radius
+                    self.restore_state();
+                    self.jac_valid = false;
+                    outcome = Some(None);
                 } else {
                     self.restore_state();
                     delta = 0.25 * step_m;
                     if delta < st.step_tolerance_m {
-                        outcome = Some(Some(self.final_status(reached, false)));
+                        outcome = Some(self.conclude(reached));
                     }
                 }
             }
@@ -1202,6 +1261,61 @@ impl IkWorkspace {
                 return s;
             }
         }
+    }
+
+    /// The iteration stops here: the final status at an exact Jacobian (`Some`);
+    /// at an updated one, `None` and the next iteration evaluates the exact one
+    /// (conclusions, `Unreachable` above all, rest on the exact Jacobian).
+    fn conclude(&mut self, reached: bool) -> Option<IkStatus> {
+        if self.jac_exact {
+            Some(self.final_status(reached, false))
+        } else {
+            self.jac_valid = false;
+            None
+        }
+    }
+
+    /// Broyden's rank-one update of `jp`, `ja`, `jt` along the accepted step
+    /// `s = q_trial - q` with the tip, axis and tension changes `y` it made
+    /// (`J += (y - J s) s^T / s^T s`; Broyden, Math. Comp. 19, 1965; Nocedal &
+    /// Wright eq. 11.24): the Jacobian at the new readings without evaluating it.
+    /// Only with every tendon taut before and after (the active set, and so the
+    /// columns' meaning, unchanged) and without friction; `false` otherwise.
+    fn broyden_update(&mut self) -> bool {
+        let p = self.p;
+        if self.tw.workspace().robot().friction_mu() > 0.0
+            || self.slack.iter().any(|s| *s)
+            || self.tw.taut().iter().any(|t| !*t)
+        {
+            return false;
+        }
+        let mut ss = 0.0;
+        for i in 0..p {
+            self.step_m[i] = self.q_trial[i] - self.q[i];
+            ss += self.step_m[i] * self.step_m[i];
+        }
+        if !(ss > 0.0) {
+            return false;
+        }
+        let s = &self.step_m;
+        let dp = self.tw.tip_position() - self.tip;
+        let da = self.tw.workspace().tip_axis() - self.axis;
+        let update = |row: &mut [f64], y: f64| {
+            let js: f64 = row.iter().zip(s).map(|(j, v)| j * v).sum();
+            let c = (y - js) / ss;
+            for (j, v) in row.iter_mut().zip(s) {
+                *j += c * v;
+            }
+        };
+        for r in 0..3 {
+            update(&mut self.jp[r * p..(r + 1) * p], dp[r]);
+            update(&mut self.ja[r * p..(r + 1) * p], da[r]);
+        }
+        let tn = self.tw.tensions();
+        for k in 0..p {
+            update(&mut self.jt[k * p..(k + 1) * p], tn[k] - self.t[k]);
+        }
+        true
     }
 
     fn is_reached(&self, target: &IkTarget) -> bool {
