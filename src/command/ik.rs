@@ -1294,7 +1294,7 @@ impl IkWorkspace {
             self.step_m[i] = self.q_trial[i] - self.q[i];
             ss += self.step_m[i] * self.step_m[i];
         }
-        if !(ss > 0.0) {
+        if ss.is_nan() || ss <= 0.0 {
             return false;
         }
         let s = &self.step_m;
@@ -1312,8 +1312,8 @@ impl IkWorkspace {
             update(&mut self.ja[r * p..(r + 1) * p], da[r]);
         }
         let tn = self.tw.tensions();
-        for k in 0..p {
-            update(&mut self.jt[k * p..(k + 1) * p], tn[k] - self.t[k]);
+        for ((row, tk), t0) in self.jt.chunks_exact_mut(p).zip(tn).zip(&self.t) {
+            update(row, tk - t0);
         }
         true
     }
@@ -1333,7 +1333,7 @@ impl IkWorkspace {
     fn final_status(&self, reached: bool, budget: bool) -> IkStatus {
         if reached {
             IkStatus::Reached
-        } else if budget || !(self.first_order <= FIRST_ORDER_TOL) {
+        } else if budget || self.first_order.is_nan() || self.first_order > FIRST_ORDER_TOL {
             IkStatus::BudgetExhausted
         } else {
             IkStatus::Unreachable {
