@@ -1,10 +1,7 @@
 //! What a warm inverse-kinematics tick allocates: a counting `#[global_allocator]`
 //! (`tests/alloc_counter`). Not yet zero: clarabel 0.11's `solve` allocates once per
-//! call, and a few ticks allocate beyond that (measured: 151 allocations in 40 ticks
-//! with 141 QP solves; the 10 others not yet traced, likely the forward solve's
-//! nested fallback on a trial step that did not converge, which
-//! `tests/tendon_rollback_alloc.rs` counts apart as not allocation-free). This test
-//! keeps the count from growing. One test only in this file (the
+//! call, and nothing else does (measured: 186 allocations in 40 ticks with 186 QP
+//! solves). This test keeps the count from growing. One test only in this file (the
 //! allocator's counts are process-wide).
 
 mod alloc_counter;
