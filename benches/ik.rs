@@ -6,8 +6,12 @@
 //! * `ik_warm_tick`: `IkWorkspace::solve` of the next row's tip, warm from the
 //!   readings the previous solve returned (the control-loop case: a new target per
 //!   tick, the previous tick's readings as the start). One iteration = one target;
-//!   after the last row it starts over from the first (one jump per 442 ticks).
-//!   Issue 44's target: <= 1 ms median.
+//!   the rows are walked forward, then backward, and so on, so that every target
+//!   is a neighbour of the previous one (starting over from the first row after
+//!   the last was a jump across the workspace; the warm chain lost its way after
+//!   it, ticks took up to 3.8 s each, and the bench did not finish its samples).
+//!   Per-call percentiles: `examples/ik_tick_profile.rs`. Issue 44's target:
+//!   <= 1 ms median.
 
 use cablesense::command::{IkSettings, IkTarget, IkWorkspace};
 use cablesense::Scene;
@@ -41,10 +45,13 @@ fn benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("ik");
     g.measurement_time(Duration::from_secs(20)).sample_size(20);
     let mut ik = IkWorkspace::from_scene(&scene, IkSettings::default()).unwrap();
-    let mut k = 0;
+    // position in the forward-then-backward walk over the rows
+    let n = targets.len();
+    let mut step = 0usize;
     g.bench_function("ik_warm_tick", |b| {
         b.iter(|| {
-            k = (k + 1) % targets.len();
+            step = (step + 1) % (2 * n - 2);
+            let k = if step < n { step } else { 2 * n - 2 - step };
             black_box(ik.solve(&targets[k]).unwrap())
         })
     });

@@ -27,8 +27,12 @@
 //!   tip's Jacobian.
 //!
 //! **Step.** Trust-region Gauss-Newton (Nocedal & Wright, *Numerical Optimization*,
-//! 2nd ed., ch. 4 and 10.3): at the current readings the linearised `phi` (plus a
-//! damping `1e-6 |dq|^2` in mm^2) is minimised over `dq` subject to the limits,
+//! 2nd ed., ch. 4 and 10.3): at the current readings the linearised `phi` plus a
+//! Levenberg-Marquardt damping `mu |dq|^2` (mm^2), `mu = 1e-6 + 0.1 |r|^2` with `r`
+//! the position (and direction) residual in mm (Yamashita & Fukushima, "On the rate
+//! of convergence of the Levenberg-Marquardt method", Computing Suppl. 15, 2001:
+//! `mu ~ |r|^2` keeps quadratic convergence, also to a non-isolated solution, as a
+//! redundant robot's are), is minimised over `dq` subject to the limits,
 //! `|dq_i| <= Delta` and the linearised tensions staying non-negative
 //! (`T + dT/dq dq >= 0`: the model of the current active set holds only up to where
 //! a taut tendon goes slack), a box-constrained convex QP solved by clarabel (interior point,
@@ -38,6 +42,31 @@
 //! the trust region) or shrinks (to a quarter of the step, `rho < 0.25`) as in
 //! Nocedal & Wright algorithm 4.1. The QP works in millimetres (readings and tip)
 //! so that its tolerances are meaningful.
+//!
+//! The damping keeps a step out of the Jacobian's near-null directions while the
+//! residual is large. Without it (the fixed `1e-6` alone), a step whose residual
+//! is mostly curvature (the tip's drop as the robot bends) is explained by such a
+//! direction: on the daru robot, pulling all three cables together moves the tip
+//! 0.09 mm per mm against 5-7 mm per mm for bending, and an undamped first step
+//! pulled all three by 1.45 mm (tensions 10 -> 17 N), to a tip 0.07 mm from the
+//! target where the tip's derivative along that direction changes sign within
+//! 1e-6 m of reading (differences of converged solves at 1e-5, 1e-6, 1e-7 m:
+//! dx/dq_1 = 4.8, 3.4, 110). There no trial step was accepted, the trust region
+//! shrank to nothing, and the target was called unreachable.
+//!
+//! **Continuation.** A gradient method finds a local minimum of `phi`, and the
+//! readings model has some that are not the target: on the daru robot at high
+//! common-mode tension (about 20 N per cable) a start 0.8 mm of one reading away
+//! from a reachable target's readings ends, from the first step on, in a valley
+//! whose floor lies 10.2 um from the target, stationary to 1e-4 (forward solves to
+//! 1e-11 m), with the readings 0.2 mm from the target's. When the first attempt does
+//! not reach and budget is left, the call starts over from its start readings and
+//! solves [`CONTINUATION_STEPS`] intermediate targets on the segment from the start
+//! tip to the target, each warm from the last (a homotopy in the target; Allgower &
+//! Georg, *Numerical Continuation Methods*, 1990, ch. 1), within the same budget;
+//! its end is kept when it is closer (lower `phi`) than the first attempt's (a
+//! creeping first attempt then goes on with the budget left). On that case it
+//! reaches; the control loop's small steps rarely need it.
 //!
 //! **Jacobian.** At a converged solve, `F(z; q) = 0` with `z = [x; T]` (scaled
 //! shooting unknowns, tensions): by the implicit function theorem
@@ -55,13 +84,33 @@
 //! depends on the direction memory, not on `z` alone: the Jacobian is then a central
 //! difference of converged forward solves (`2p` solves).
 //!
+//! **Jacobian updates.** After an accepted step with every tendon taut before and
+//! after (and no friction), the Jacobians are not evaluated again: Broyden's
+//! rank-one update along the step (Broyden, "A class of methods for solving
+//! nonlinear simultaneous equations", Math. Comp. 19, 1965; Nocedal & Wright eq.
+//! 11.24) carries them to the new readings, and into the next call (the next
+//! tick starts where this one ended), as long as the model predicted the step well
+//! (`rho > 0.75`). The exact Jacobian is evaluated again after a poorer step, when
+//! a step from an updated one is rejected (same trust radius), when the active set
+//! changes, and before any conclusion other than `Reached` (a stationary point is
+//! judged on the exact Jacobian only). [`IkReport::jacobians`] counts the
+//! evaluations. On the FTDCR v4's warm ticks an evaluation (dual sweep, `F_z`
+//! factored, 18 tangent passes) costs about 3.4 forward solves.
+//!
 //! **Outcomes** ([`IkStatus`]): `Reached` (tip within [`IkSettings::tolerance_m`], and
 //! the direction within [`IkSettings::angle_tolerance_rad`] when one is given);
-//! `Unreachable` when the constrained step stops improving `phi` with the tip still
-//! farther than the tolerance (steps below [`IkSettings::step_tolerance_m`], or two
-//! steps in a row improving `phi` by less than 1e-4 of itself): the closest tip found
-//! and its distance are returned; `BudgetExhausted` when the iterations or forward
-//! solves of [`IkSettings`] run out first (the best readings found are kept). The
+//! `Unreachable` only at a constrained stationary point with the tip still farther
+//! than the tolerance: the first-order condition of the bounded least squares
+//! (Nocedal & Wright eq. 12.34, with the limits as the only constraints) holds to
+//! 1e-2, i.e. the gradient `g = -2 J^T r` projected on the directions the limits
+//! allow (a reading on its lower limit or a slack tendon only pulls, one on its
+//! upper limit only pays out) is below 1e-2 of `2 |J|_F |r|` ([`IkReport::first_order`]),
+//! and the iteration has stopped there (no step, steps below
+//! [`IkSettings::step_tolerance_m`], or two steps in a row improving `phi` by less
+//! than 1e-4 of itself): the closest tip found and its distance are returned.
+//! `BudgetExhausted` when the iterations or forward solves of [`IkSettings`] run out
+//! first, or when the iteration stops at a point that is not stationary (the best
+//! readings found are kept). The
 //! readings are always within the limits, and the workspace stays at the returned
 //! readings (the next call's warm start).
 
@@ -88,6 +137,17 @@ const TANGENT_STEP_M: f64 = 1e-6;
 const FD_STEP_M: f64 = 1e-5;
 /// Damping of the step in the QP (per mm^2 of step).
 const DAMPING: f64 = 1e-6;
+/// Levenberg-Marquardt factor `c` of the damping `mu = c |r|^2` (`r` the
+/// position and direction residual in mm; module docs).
+const LM_FACTOR: f64 = 0.1;
+/// First-order tolerance: a point whose projected gradient of `phi` is below this
+/// fraction of `2 |J| |r|` is a constrained stationary point (module docs).
+const FIRST_ORDER_TOL: f64 = 1e-2;
+/// Intermediate targets of the continuation after a first attempt that did not
+/// reach (module docs).
+const CONTINUATION_STEPS: usize = 4;
+/// A reading within this of a limit is on it (m).
+const ON_BOUND_M: f64 = 1e-12;
 
 /// The secondary objective that resolves the redundancy (module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -237,15 +297,19 @@ pub enum IkStatus {
     /// The tip is within the tolerance of the target (and the direction within its
     /// tolerance when one was given).
     Reached,
-    /// The constrained steps stopped improving with the tip farther than the
-    /// tolerance: the closest tip found (m) and its distance to the target (m).
+    /// The tip is farther than the tolerance at a constrained stationary point of
+    /// `phi` (first-order condition with the limits, [`IkReport::first_order`]):
+    /// the closest tip found (m) and its distance to the target (m).
     Unreachable {
         /// Closest tip found (m).
         closest_tip_m: Vector3<f64>,
         /// Its distance to the target (m).
         distance_m: f64,
     },
-    /// The iterations or forward solves of the budget ran out first.
+    /// The iterations or forward solves of the budget ran out first, or the
+    /// trust region shrank to nothing at a point that is not stationary (the
+    /// model of the step is not good there at any radius, e.g. where the forward
+    /// solves' tolerance hides the descent): the best readings found are kept.
     BudgetExhausted,
 }
 
@@ -271,8 +335,12 @@ pub struct IkReport {
     pub distance_m: f64,
     /// Angle between the tip axis and the target direction (rad; 0 without one).
     pub angle_rad: f64,
-    /// Gauss-Newton iterations (Jacobians evaluated).
+    /// Gauss-Newton iterations (QP models built from an evaluated or an updated
+    /// Jacobian).
     pub iterations: usize,
+    /// Jacobians evaluated (the exact one, or the friction fallback's differences);
+    /// the other iterations use Broyden's update along the last step.
+    pub jacobians: usize,
     /// Forward solves (trial steps, friction differences).
     pub forward_solves: usize,
     /// Bounded least-squares steps solved (clarabel).
@@ -281,6 +349,19 @@ pub struct IkReport {
     pub objective: IkObjective,
     /// Tendons slack at the returned readings.
     pub slack: usize,
+    /// First-order measure at the last linearisation: the norm of the projected
+    /// gradient of `phi` over `2 |J|_F |r|` (dimensionless; 0 at a constrained
+    /// stationary point, `Unreachable` only below 1e-2; NaN when none was built).
+    pub first_order: f64,
+}
+
+/// Work of one call: Gauss-Newton iterations (Jacobians), forward solves, QPs.
+#[derive(Default)]
+struct Counts {
+    iterations: usize,
+    jacobians: usize,
+    solves: usize,
+    qp_solves: usize,
 }
 
 /// The bounded least-squares step: a clarabel solver built once (dense upper
@@ -377,6 +458,11 @@ pub struct IkWorkspace {
     /// The state at the accepted readings during a call (to return to after a
     /// rejected trial step).
     best: Box<TendonWorkspace>,
+    /// The state at the call's start and at the end of its first attempt (the
+    /// continuation starts from the one and falls back to the other).
+    start_ws: Box<TendonWorkspace>,
+    end_ws: Box<TendonWorkspace>,
+    q_end: Vec<f64>,
     limits: ActuatorLimits,
     settings: IkSettings,
     /// Largest reading that leaves a tendon 1 % of its rest free length (m).
@@ -417,6 +503,14 @@ pub struct IkWorkspace {
     u: Vec<f64>,
     qp: StepQp,
     has_state: bool,
+    /// First-order measure at the last `build_qp` (see [`IkReport::first_order`]).
+    first_order: f64,
+    /// `jp`, `ja`, `jt`, `slack`, `q_lin` hold at the accepted readings, and were
+    /// evaluated there (not updated along a step).
+    jac_valid: bool,
+    jac_exact: bool,
+    /// The last accepted step (m), for the Broyden update.
+    step_m: Vec<f64>,
 }
 
 impl IkWorkspace {
@@ -445,6 +539,9 @@ impl IkWorkspace {
             .collect();
         let best = Box::new(tw.clone());
         let mut me = Self {
+            start_ws: best.clone(),
+            end_ws: best.clone(),
+            q_end: vec![0.0; p],
             best,
             limits,
             settings,
@@ -476,6 +573,10 @@ impl IkWorkspace {
             u: vec![0.0; p],
             qp: StepQp::new(p)?,
             has_state: false,
+            first_order: f64::NAN,
+            jac_valid: false,
+            jac_exact: false,
+            step_m: vec![0.0; p],
             tw,
         };
         let zero = vec![0.0; p];
@@ -526,6 +627,7 @@ impl IkWorkspace {
         self.q.copy_from_slice(q);
         self.accept_state();
         self.has_state = true;
+        self.jac_valid = false;
         Ok(())
     }
 
@@ -738,6 +840,7 @@ impl IkWorkspace {
         if !self.has_state {
             return None;
         }
+        self.jac_valid = false;
         self.fd_jacobian()
     }
 
@@ -833,15 +936,27 @@ impl IkWorkspace {
             }
         };
         rows(&self.jp, &e, 1.0, &mut self.h, &mut self.g);
+        // squared residual (mm^2) and |J|_F^2 of the least-squares rows
+        let mut r2 = e.norm_squared();
+        let mut j2: f64 = self.jp.iter().map(|v| v * v).sum();
         if let Some(d) = &target.direction {
             // l_d (Ja u) in mm with l_d in m and Ja in 1/m; target l_d e_a in mm
             let ld = self.settings.direction_weight_m;
             let ea = (d.normalize() - self.axis) * (ld * MM);
             rows(&self.ja, &ea, ld, &mut self.h, &mut self.g);
+            r2 += ea.norm_squared();
+            j2 += ld * ld * self.ja.iter().map(|v| v * v).sum::<f64>();
         }
+        // the first-order measure from the least-squares gradient (before the
+        // secondary's, which only picks among solutions)
+        self.first_order = self.projected_gradient_norm() / (2.0 * (r2 * j2).sqrt()).max(1e-300);
         let w = self.settings.secondary_weight;
+        // Levenberg-Marquardt damping mu = c |r|^2 (Yamashita & Fukushima 2001),
+        // at most c |J|_F^2: a large residual (a target far outside) does not
+        // freeze the step
+        let mu = DAMPING + LM_FACTOR * r2.min(j2);
         for a in 0..p {
-            self.h[a * p + a] += 2.0 * DAMPING;
+            self.h[a * p + a] += 2.0 * mu;
         }
         match self.settings.objective {
             IkObjective::Closest => {
@@ -898,6 +1013,27 @@ impl IkWorkspace {
         }
     }
 
+    /// Norm of the projected gradient `g` (mm): per reading, the part of `-g` that
+    /// the limits allow (a reading on its lower limit, or a slack tendon's, whose
+    /// derivative is the pull beyond its engagement point, only increases; one on
+    /// its upper limit only decreases).
+    fn projected_gradient_norm(&self) -> f64 {
+        let mut n2 = 0.0;
+        for i in 0..self.p {
+            let gi = self.g[i];
+            let lo = self.slack[i] || self.q[i] <= self.limits.min_m[i] + ON_BOUND_M;
+            let hi = self.q_lin[i] >= self.limits.max_m[i].min(self.q_phys[i]) - ON_BOUND_M;
+            let v = match (lo, hi) {
+                (true, true) => 0.0,
+                (true, false) => gi.min(0.0),
+                (false, true) => gi.max(0.0),
+                (false, false) => gi,
+            };
+            n2 += v * v;
+        }
+        n2.sqrt()
+    }
+
     /// Model value of the step `u` (mm^2): `0.5 u^T H u + g^T u`.
     fn model(&self) -> f64 {
         let p = self.p;
@@ -922,45 +1058,137 @@ impl IkWorkspace {
             self.set_readings(&zero)?;
         }
         self.q0.copy_from_slice(&self.q);
+        WarmCopy::warm_copy_from(&mut *self.start_ws, &self.tw);
+        let mut n = Counts::default();
+        let mut status = self.iterate(target, &mut n);
+        let st = &self.settings;
+        let left = n.iterations < st.max_iterations && n.solves < st.max_forward_solves;
+        if !matches!(status, IkStatus::Reached) && left {
+            // continuation: from the call's start through intermediate targets on
+            // the segment from the start tip to the target, each solved warm from
+            // the last; kept when it ends closer (module docs)
+            let (first_status, first_fo) = (status, self.first_order);
+            let phi_first = self.merit(target, &self.tip, &self.axis, &self.q, &self.t);
+            WarmCopy::warm_copy_from(&mut *self.end_ws, &self.tw);
+            self.q_end.copy_from_slice(&self.q);
+            self.tw.warm_copy_from(&self.start_ws);
+            self.q.copy_from_slice(&self.q0);
+            self.accept_state();
+            self.jac_valid = false;
+            let tip0 = self.tip;
+            for k in 1..=CONTINUATION_STEPS {
+                let f = k as f64 / CONTINUATION_STEPS as f64;
+                let sub = IkTarget {
+                    position_m: tip0 + (target.position_m - tip0) * f,
+                    direction: target.direction,
+                };
+                status = self.iterate(&sub, &mut n);
+                if matches!(status, IkStatus::BudgetExhausted)
+                    && (n.iterations >= self.settings.max_iterations
+                        || n.solves >= self.settings.max_forward_solves)
+                {
+                    break;
+                }
+            }
+            if self.merit(target, &self.tip, &self.axis, &self.q, &self.t) >= phi_first {
+                self.tw.warm_copy_from(&self.end_ws);
+                self.q.copy_from_slice(&self.q_end);
+                self.accept_state();
+                self.jac_valid = false;
+                status = first_status;
+                self.first_order = first_fo;
+            } else if !matches!(status, IkStatus::Reached) && self.is_reached(target) {
+                status = IkStatus::Reached;
+            }
+        }
+        let st = self.settings.clone();
+        let (iterations, solves, qp_solves) = (n.iterations, n.solves, n.qp_solves);
+        let distance = (target.position_m - self.tip).norm();
+        let status = match status {
+            IkStatus::Unreachable { .. } => IkStatus::Unreachable {
+                closest_tip_m: self.tip,
+                distance_m: distance,
+            },
+            s => s,
+        };
+        Ok(IkReport {
+            status,
+            tip_m: self.tip,
+            distance_m: distance,
+            angle_rad: target.direction.map_or(0.0, |d| {
+                d.normalize().dot(&self.axis).clamp(-1.0, 1.0).acos()
+            }),
+            iterations,
+            jacobians: n.jacobians,
+            forward_solves: solves,
+            qp_solves,
+            objective: st.objective,
+            slack: self.best.taut().iter().filter(|t| !**t).count(),
+            first_order: self.first_order,
+        })
+    }
+
+    /// The trust-region iteration towards `target` from the accepted readings,
+    /// counting into `n` against the call's budget (module docs); the status.
+    fn iterate(&mut self, target: &IkTarget, n: &mut Counts) -> IkStatus {
         let st = self.settings.clone();
         let mut delta = st.trust_radius_m;
-        let mut solves = 0usize;
-        let mut iterations = 0usize;
         let mut stalls = 0usize;
-        let mut qp_solves = 0usize;
         let mut phi = self.merit(target, &self.tip, &self.axis, &self.q, &self.t);
-        let status = loop {
+        self.first_order = f64::NAN;
+        loop {
             let reached = self.is_reached(target);
             if reached && st.objective == IkObjective::Closest {
-                break IkStatus::Reached;
+                return IkStatus::Reached;
             }
-            if iterations >= st.max_iterations || solves >= st.max_forward_solves {
-                break self.final_status(reached, true);
+            if n.iterations >= st.max_iterations || n.solves >= st.max_forward_solves {
+                return self.final_status(reached, true);
             }
-            iterations += 1;
-            match self.compute_jacobian() {
-                Some(n) => solves += n,
-                None => break self.final_status(reached, false),
+            n.iterations += 1;
+            if !self.jac_valid {
+                self.first_order = f64::NAN;
+                match self.compute_jacobian() {
+                    Some(k) => n.solves += k,
+                    None => return self.final_status(reached, false),
+                }
+                n.jacobians += 1;
+                self.jac_valid = true;
+                self.jac_exact = true;
             }
             // trust-region trials at this Jacobian
             let mut outcome = None;
+            let mut first = true;
             while outcome.is_none() {
                 self.build_qp(target, delta);
+                if std::mem::take(&mut first) && stalls >= 2 {
+                    // slow progress: judged on the exact Jacobian
+                    if !self.jac_exact {
+                        self.jac_valid = false;
+                        outcome = Some(None);
+                        break;
+                    }
+                    if reached || self.first_order <= FIRST_ORDER_TOL {
+                        // reached (a secondary objective no longer improving), or
+                        // at a stationary point: the closest tip
+                        outcome = Some(Some(self.final_status(reached, false)));
+                        break;
+                    }
+                }
                 let mut u = std::mem::take(&mut self.u);
                 let ok = self.qp.solve(&mut u);
-                qp_solves += 1;
+                n.qp_solves += 1;
                 self.u = u;
                 if !ok {
-                    outcome = Some(Some(self.final_status(reached, false)));
+                    outcome = Some(self.conclude(reached));
                     break;
                 }
                 let step_m = self.u.iter().fold(0.0f64, |m, v| m.max(v.abs())) / MM;
                 let pred = -self.model();
                 if step_m < st.step_tolerance_m || pred <= 1e-15 * phi.max(1e-300) {
-                    outcome = Some(Some(self.final_status(reached, false)));
+                    outcome = Some(self.conclude(reached));
                     break;
                 }
-                if solves >= st.max_forward_solves {
+                if n.solves >= st.max_forward_solves {
                     outcome = Some(Some(self.final_status(reached, true)));
                     break;
                 }
@@ -978,7 +1206,7 @@ impl IkWorkspace {
                     };
                     self.q_trial[i] = v.clamp(lo, hi);
                 }
-                solves += 1;
+                n.solves += 1;
                 let converged = self
                     .tw
                     .solve_readings(&self.q_trial)
@@ -999,8 +1227,16 @@ impl IkWorkspace {
                     } else if rho < 0.25 {
                         delta = 0.25 * step_m;
                     }
+                    let updated = self.broyden_update();
                     std::mem::swap(&mut self.q, &mut self.q_trial);
                     self.accept_state();
+                    // the update is trusted while the model predicts well
+                    self.jac_valid = updated && rho > 0.75;
+                    self.jac_exact = false;
+                    if updated {
+                        // all taut: the linearisation point is the readings
+                        self.q_lin.copy_from_slice(&self.q);
+                    }
                     let gain = phi - phi_new;
                     phi = phi_new;
                     if gain < 1e-4 * (phi + gain) {
@@ -1009,43 +1245,78 @@ impl IkWorkspace {
                         stalls = 0;
                     }
                     outcome = Some(None);
+                } else if !self.jac_exact {
+                    // the updated Jacobian's step failed: the exact one, same radius
+                    self.restore_state();
+                    self.jac_valid = false;
+                    outcome = Some(None);
                 } else {
                     self.restore_state();
                     delta = 0.25 * step_m;
                     if delta < st.step_tolerance_m {
-                        outcome = Some(Some(self.final_status(reached, false)));
+                        outcome = Some(self.conclude(reached));
                     }
                 }
             }
             if let Some(Some(s)) = outcome {
-                break s;
+                return s;
             }
-            if stalls >= 2 {
-                let reached = self.is_reached(target);
-                break self.final_status(reached, false);
+        }
+    }
+
+    /// The iteration stops here: the final status at an exact Jacobian (`Some`);
+    /// at an updated one, `None` and the next iteration evaluates the exact one
+    /// (conclusions, `Unreachable` above all, rest on the exact Jacobian).
+    fn conclude(&mut self, reached: bool) -> Option<IkStatus> {
+        if self.jac_exact {
+            Some(self.final_status(reached, false))
+        } else {
+            self.jac_valid = false;
+            None
+        }
+    }
+
+    /// Broyden's rank-one update of `jp`, `ja`, `jt` along the accepted step
+    /// `s = q_trial - q` with the tip, axis and tension changes `y` it made
+    /// (`J += (y - J s) s^T / s^T s`; Broyden, Math. Comp. 19, 1965; Nocedal &
+    /// Wright eq. 11.24): the Jacobian at the new readings without evaluating it.
+    /// Only with every tendon taut before and after (the active set, and so the
+    /// columns' meaning, unchanged) and without friction; `false` otherwise.
+    fn broyden_update(&mut self) -> bool {
+        let p = self.p;
+        if self.tw.workspace().robot().friction_mu() > 0.0
+            || self.slack.iter().any(|s| *s)
+            || self.tw.taut().iter().any(|t| !*t)
+        {
+            return false;
+        }
+        let mut ss = 0.0;
+        for i in 0..p {
+            self.step_m[i] = self.q_trial[i] - self.q[i];
+            ss += self.step_m[i] * self.step_m[i];
+        }
+        if ss.is_nan() || ss <= 0.0 {
+            return false;
+        }
+        let s = &self.step_m;
+        let dp = self.tw.tip_position() - self.tip;
+        let da = self.tw.workspace().tip_axis() - self.axis;
+        let update = |row: &mut [f64], y: f64| {
+            let js: f64 = row.iter().zip(s).map(|(j, v)| j * v).sum();
+            let c = (y - js) / ss;
+            for (j, v) in row.iter_mut().zip(s) {
+                *j += c * v;
             }
         };
-        let distance = (target.position_m - self.tip).norm();
-        let status = match status {
-            IkStatus::Unreachable { .. } => IkStatus::Unreachable {
-                closest_tip_m: self.tip,
-                distance_m: distance,
-            },
-            s => s,
-        };
-        Ok(IkReport {
-            status,
-            tip_m: self.tip,
-            distance_m: distance,
-            angle_rad: target.direction.map_or(0.0, |d| {
-                d.normalize().dot(&self.axis).clamp(-1.0, 1.0).acos()
-            }),
-            iterations,
-            forward_solves: solves,
-            qp_solves,
-            objective: st.objective,
-            slack: self.best.taut().iter().filter(|t| !**t).count(),
-        })
+        for r in 0..3 {
+            update(&mut self.jp[r * p..(r + 1) * p], dp[r]);
+            update(&mut self.ja[r * p..(r + 1) * p], da[r]);
+        }
+        let tn = self.tw.tensions();
+        for ((row, tk), t0) in self.jt.chunks_exact_mut(p).zip(tn).zip(&self.t) {
+            update(row, tk - t0);
+        }
+        true
     }
 
     fn is_reached(&self, target: &IkTarget) -> bool {
@@ -1057,11 +1328,13 @@ impl IkWorkspace {
         d <= self.settings.tolerance_m && angle_ok
     }
 
-    /// The status when the iteration ends: reached, else out of budget or stalled.
+    /// The status when the iteration ends: reached; else unreachable at a
+    /// constrained stationary point (first-order measure of the last linearisation
+    /// below [`FIRST_ORDER_TOL`]); else out of budget.
     fn final_status(&self, reached: bool, budget: bool) -> IkStatus {
         if reached {
             IkStatus::Reached
-        } else if budget {
+        } else if budget || self.first_order.is_nan() || self.first_order > FIRST_ORDER_TOL {
             IkStatus::BudgetExhausted
         } else {
             IkStatus::Unreachable {

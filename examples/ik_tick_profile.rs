@@ -1,0 +1,75 @@
+//! Warm inverse-kinematics ticks on the calibrated FTDCR v4: the targets are the
+//! model's tips at consecutive val rows, each tick warm from the previous tick's
+//! readings (what `benches/ik.rs` times). Prints per-call time percentiles and
+//! what a tick costs (iterations = Jacobians, forward solves, QP solves), and the
+//! slowest calls with their status.
+//!
+//! `cargo run --release --example ik_tick_profile [PASSES]`
+use cablesense::command::{IkSettings, IkTarget, IkWorkspace};
+use cablesense::Scene;
+use std::time::Instant;
+
+fn pct(v: &[f64], f: f64) -> f64 {
+    v[((v.len() - 1) as f64 * f).round() as usize]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let passes: usize = std::env::args().nth(1).map_or(Ok(2), |s| s.parse())?;
+    let scene = Scene::load("data/calibration/ftdcr_v4_calibrated.toml")?;
+    let mut tw = scene.tendon_workspace()?;
+    let mut parser = scene.readings_parser(&tw);
+    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv")?;
+    let mut targets = Vec::new();
+    for (i, l) in text.lines().enumerate() {
+        if let Ok(Some(r)) = parser.line(i + 1, l) {
+            if tw.solve_readings(&r.readings_m)?.status.is_converged() {
+                targets.push(IkTarget::position(tw.tip_position()));
+            }
+        }
+    }
+    let mut ik = IkWorkspace::from_scene(&scene, IkSettings::default())?;
+    let (mut times, mut its, mut jacs, mut fs, mut qps) = (Vec::new(), 0, 0, 0, 0);
+    let mut slow = Vec::new();
+    let mut statuses = std::collections::BTreeMap::new();
+    for pass in 0..passes {
+        for (k, t) in targets.iter().enumerate() {
+            let t0 = Instant::now();
+            let r = ik.solve(t)?;
+            let dt = t0.elapsed().as_secs_f64() * 1e3;
+            if pass > 0 || k > 0 {
+                times.push(dt);
+                its += r.iterations;
+                jacs += r.jacobians;
+                fs += r.forward_solves;
+                qps += r.qp_solves;
+                *statuses.entry(r.status.name()).or_insert(0) += 1;
+            }
+            if dt > 10.0 {
+                slow.push((pass, k, dt, r));
+            }
+        }
+    }
+    let n = times.len() as f64;
+    times.sort_by(f64::total_cmp);
+    println!(
+        "{} ticks: p50 {:.3} ms, p90 {:.3}, p99 {:.3}, max {:.3}, mean {:.3}",
+        times.len(),
+        pct(&times, 0.5),
+        pct(&times, 0.9),
+        pct(&times, 0.99),
+        times[times.len() - 1],
+        times.iter().sum::<f64>() / n
+    );
+    println!(
+        "per tick: {:.2} iterations, {:.2} Jacobians evaluated, {:.2} forward solves, {:.2} QP solves; {statuses:?}",
+        its as f64 / n,
+        jacs as f64 / n,
+        fs as f64 / n,
+        qps as f64 / n
+    );
+    slow.sort_by(|a, b| b.2.total_cmp(&a.2));
+    for (pass, k, dt, r) in slow.iter().take(12) {
+        println!("slow: pass {pass} target {k}: {dt:.1} ms {r:?}");
+    }
+    Ok(())
+}
