@@ -92,6 +92,17 @@ pub(super) struct Secant {
     pts: [Point; POINTS],
     /// The current solve started from `pts[0]` (set by [`Secant::start`]).
     from_sol: bool,
+    /// Stamp of the contents, fresh (process-wide unique) at every change: two
+    /// predictors with the same stamp hold the same values, so the rollback's copy
+    /// skips the points when the stamps agree (a tendon row's joint path never
+    /// touches this predictor: ~1 200 instructions a 1 kHz tick saved).
+    stamp: u64,
+}
+
+/// A stamp no predictor has held before.
+fn fresh_stamp() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 impl Secant {
@@ -100,6 +111,7 @@ impl Secant {
         Self {
             pts: std::array::from_fn(|_| Point::new(n, naux)),
             from_sol: false,
+            stamp: fresh_stamp(),
         }
     }
 
@@ -127,6 +139,7 @@ impl Secant {
         theta: &[f64],
         predict: bool,
     ) -> bool {
+        self.stamp = fresh_stamp();
         self.from_sol = self.pts[0].valid && self.pts[0].x_ret == x;
         // the latest solution is consumed: it is noted again if this solve converges
         self.pts[0].valid = false;
@@ -209,6 +222,7 @@ impl Secant {
         loads: &Loads,
         theta: &[f64],
     ) {
+        self.stamp = fresh_stamp();
         if !converged {
             self.pts.iter_mut().for_each(|p| p.valid = false);
             return;
@@ -307,7 +321,10 @@ impl crate::math::warm::WarmCopy for Point {
 
 impl crate::math::warm::WarmCopy for Secant {
     fn warm_copy_from(&mut self, src: &Self) {
-        crate::math::warm::warm_fields!(self, src, copy: [pts, from_sol], keep: []);
+        if self.stamp == src.stamp {
+            return;
+        }
+        crate::math::warm::warm_fields!(self, src, copy: [pts, from_sol, stamp], keep: []);
     }
 }
 
