@@ -92,12 +92,13 @@ fn range_check(text: &str) {
 
 /// Lines (1-based) of `Recording::parse_str`'s data lines: after a leading BOM,
 /// split at `\n`, `\r` trimmed at the end, blank and `#` lines skipped.
+/// The lines the one row reader (`files::rows`) reads: each without its leading BOMs
+/// and surrounding white space, blank and `#` lines skipped.
 fn recording_lines(text: &str) -> Vec<(usize, &str)> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     text.split('\n')
         .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+        .map(|(i, l)| (i + 1, l.trim_start_matches('\u{feff}').trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
         .collect()
 }
 
@@ -197,13 +198,14 @@ fn pull(head: &[u8; HEADER_BYTES], text: &str) {
             return;
         }
     };
-    // the parser's data lines: after leading BOMs, `lines()`, blank and `#` lines skipped
+    // the parser's data lines (the one row reader, `files::rows`): each line without
+    // its leading BOMs and surrounding white space, blank and `#` lines skipped, the
+    // first one the header
     let data_lines: Vec<usize> = text
-        .trim_start_matches('\u{feff}')
         .lines()
         .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
-        .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'))
+        .map(|(i, l)| (i + 1, l.trim_start_matches('\u{feff}').trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
         .skip(1)
         .map(|(i, _)| i)
         .collect();
