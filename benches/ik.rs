@@ -20,23 +20,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 fn targets(scene: &Scene) -> Vec<IkTarget> {
-    let mut tw = scene.tendon_workspace().unwrap();
-    let mut p = scene.readings_parser(&tw);
     let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
-    let mut out = Vec::new();
-    for (i, l) in text.lines().enumerate() {
-        if let Ok(Some(r)) = p.line(i + 1, l) {
-            if tw
-                .solve_readings(&r.readings_m)
-                .unwrap()
-                .status
-                .is_converged()
-            {
-                out.push(IkTarget::position(tw.tip_position()));
-            }
-        }
-    }
-    out
+    let tips = scene.model_tips(&text, usize::MAX).unwrap();
+    tips.into_iter().map(IkTarget::position).collect()
 }
 
 fn benches(c: &mut Criterion) {

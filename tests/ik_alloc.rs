@@ -16,25 +16,13 @@ use cablesense::Scene;
 #[test]
 fn warm_ik_tick_allocations_are_bounded() {
     let scene = Scene::load("data/calibration/ftdcr_v4_calibrated.toml").unwrap();
-    let mut tw = scene.tendon_workspace().unwrap();
-    let mut p = scene.readings_parser(&tw);
     let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
-    let mut targets = Vec::new();
-    for (i, l) in text.lines().enumerate() {
-        if let Ok(Some(r)) = p.line(i + 1, l) {
-            if tw
-                .solve_readings(&r.readings_m)
-                .unwrap()
-                .status
-                .is_converged()
-            {
-                targets.push(IkTarget::position(tw.tip_position()));
-            }
-        }
-        if targets.len() == 50 {
-            break;
-        }
-    }
+    let targets: Vec<IkTarget> = scene
+        .model_tips(&text, 50)
+        .unwrap()
+        .into_iter()
+        .map(IkTarget::position)
+        .collect();
     let mut ik = IkWorkspace::from_scene(&scene, IkSettings::default()).unwrap();
     for t in &targets[..10] {
         ik.solve(t).unwrap();

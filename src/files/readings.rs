@@ -384,6 +384,31 @@ impl Scene {
     pub fn readings_parser(&self, ws: &TendonWorkspace) -> ReadingsParser {
         ReadingsParser::from_scene(self, ws)
     }
+
+    /// The model's tips (m, base frame) at the rows of a readings text, solved warm in
+    /// order; rows that do not parse or whose solve does not converge are skipped, and
+    /// at most `limit` tips are returned. The targets of the IK round trips (`reach`
+    /// without arguments, the IK bench and tests).
+    pub fn model_tips(
+        &self,
+        readings_text: &str,
+        limit: usize,
+    ) -> Result<Vec<nalgebra::Vector3<f64>>, crate::error::ModelError> {
+        let mut tw = self.tendon_workspace()?;
+        let mut parser = self.readings_parser(&tw);
+        let mut out = Vec::new();
+        for (i, l) in readings_text.lines().enumerate() {
+            if out.len() == limit {
+                break;
+            }
+            if let Ok(Some(r)) = parser.line(i + 1, l) {
+                if tw.solve_readings(&r.readings_m)?.status.is_converged() {
+                    out.push(tw.tip_position());
+                }
+            }
+        }
+        Ok(out)
+    }
 }
 
 #[cfg(test)]

@@ -105,17 +105,8 @@ fn parse_targets(text: &str, file: &str) -> anyhow::Result<Vec<IkTarget>> {
 
 /// The model's tips at the readings of the embedded val recording.
 fn val_tips(scene: &Scene) -> anyhow::Result<Vec<IkTarget>> {
-    let mut tw = scene.tendon_workspace()?;
-    let mut p = scene.readings_parser(&tw);
-    let mut out = Vec::new();
-    for (i, l) in VAL_CSV.lines().enumerate() {
-        if let Ok(Some(r)) = p.line(i + 1, l) {
-            if tw.solve_readings(&r.readings_m)?.status.is_converged() {
-                out.push(IkTarget::position(tw.tip_position()));
-            }
-        }
-    }
-    Ok(out)
+    let tips = scene.model_tips(VAL_CSV, usize::MAX)?;
+    Ok(tips.into_iter().map(IkTarget::position).collect())
 }
 
 fn percentile(sorted: &[f64], f: f64) -> f64 {
