@@ -21,12 +21,8 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 fn rows(scene: &Scene, ws: &TendonWorkspace) -> Vec<ReadingRow> {
-    let mut p = scene.readings_parser(ws);
     let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").expect("shipped data");
-    text.lines()
-        .enumerate()
-        .filter_map(|(i, l)| p.line(i + 1, l).ok().flatten())
-        .collect()
+    scene.readings_parser(ws).good_rows(&text)
 }
 
 /// A workspace whose calls may run `max_passes` rod evaluations.

@@ -49,12 +49,8 @@ use std::hint::black_box;
 use std::time::Duration;
 
 fn rows(scene: &Scene, ws: &cablesense::tendons::TendonWorkspace) -> Vec<ReadingRow> {
-    let mut p = scene.readings_parser(ws);
     let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").expect("shipped data");
-    text.lines()
-        .enumerate()
-        .filter_map(|(i, l)| p.line(i + 1, l).ok().flatten())
-        .collect()
+    scene.readings_parser(ws).good_rows(&text)
 }
 
 /// The 1 kHz control loop's position in the recording: row interval `k`, time `t`

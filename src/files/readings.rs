@@ -356,6 +356,17 @@ impl ReadingsParser {
 }
 
 impl ReadingsParser {
+    /// The rows of a whole readings text that parse, in order; lines that do not
+    /// (headers, comments, bad rows) are skipped without a word: for benches, tests
+    /// and targets built from shipped recordings, not for user input, whose bad lines
+    /// must be reported ([`ReadingsParser::line`]).
+    pub fn good_rows(&mut self, text: &str) -> Vec<ReadingRow> {
+        text.lines()
+            .enumerate()
+            .filter_map(|(i, l)| self.line(i + 1, l).ok().flatten())
+            .collect()
+    }
+
     /// A parser for readings files of `scene`'s displacement-driven tendons (as
     /// solved by `ws`), with a `length_<cable>` column for each passive (measuring)
     /// cable.
@@ -395,16 +406,14 @@ impl Scene {
         limit: usize,
     ) -> Result<Vec<nalgebra::Vector3<f64>>, crate::error::ModelError> {
         let mut tw = self.tendon_workspace()?;
-        let mut parser = self.readings_parser(&tw);
+        let rows = self.readings_parser(&tw).good_rows(readings_text);
         let mut out = Vec::new();
-        for (i, l) in readings_text.lines().enumerate() {
+        for r in &rows {
             if out.len() == limit {
                 break;
             }
-            if let Ok(Some(r)) = parser.line(i + 1, l) {
-                if tw.solve_readings(&r.readings_m)?.status.is_converged() {
-                    out.push(tw.tip_position());
-                }
+            if tw.solve_readings(&r.readings_m)?.status.is_converged() {
+                out.push(tw.tip_position());
             }
         }
         Ok(out)
