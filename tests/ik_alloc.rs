@@ -27,7 +27,8 @@ fn warm_ik_tick_allocations_are_bounded() {
     for t in &targets[..10] {
         ik.solve(t).unwrap();
     }
-    let per_qp = clarabel_allocations_per_solve(9);
+    // the step QP has one variable per reading column (nine on FTDCR v4)
+    let per_qp = clarabel_allocations_per_solve(ik.tendon_workspace().columns().len());
     let (mut allocs, mut qps) = (0, 0);
     let mut reached = 0;
     for t in &targets[10..] {
