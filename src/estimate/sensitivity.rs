@@ -1,15 +1,14 @@
 //! Sensitivity bookkeeping: Broyden updates of reused sensitivities, and the fresh
 //! sweep that makes the statistics exact.
 
-// Index loops below mirror the matrix formulas on flat buffers.
-#![allow(clippy::needless_range_loop)]
-
 use super::model::EstimationModel;
 use super::{EstimateStatus, Estimator};
+use crate::math::broyden::secant_row_update;
 
 impl<M: EstimationModel> Estimator<M> {
     /// Broyden's rank-one update of the reused sensitivities with the observed change
-    /// of the lengths over the accepted step `s`: `G += (dl - G s) s^T / (s^T s)`.
+    /// of the lengths over the accepted step `s`: `G += (dl - G s) s^T / (s^T s)`
+    /// ([`secant_row_update`] row by row).
     /// Keeps the secant condition `G s = dl`, so reused sensitivities converge
     /// superlinearly instead of linearly; a fresh sweep replaces them when the cost
     /// stops dropping as predicted.
@@ -20,14 +19,8 @@ impl<M: EstimationModel> Estimator<M> {
             return;
         }
         for j in 0..c {
-            let mut gs = 0.0;
-            for k in 0..p {
-                gs += self.g[j * p + k] * self.step[k];
-            }
-            let r = (self.len[j] - self.len_prev[j] - gs) / ss;
-            for k in 0..p {
-                self.g[j * p + k] += r * self.step[k];
-            }
+            let y = self.len[j] - self.len_prev[j];
+            secant_row_update(&mut self.g[j * p..(j + 1) * p], &self.step[..p], ss, y);
         }
     }
 

@@ -7,6 +7,7 @@ mod banded;
 mod dual;
 mod kernels;
 mod lu;
+pub(crate) mod broyden;
 pub(crate) mod newton;
 mod so3;
 pub(crate) mod step;

@@ -22,6 +22,7 @@
 //! by continuation or sensitivities: [`DenseLu::factorizations`]). Buffers are sized
 //! once; nothing allocates.
 
+use crate::math::broyden::{inverse_update, SkipTest, TailWeight};
 use crate::math::DenseLu;
 
 /// Inverse-Jacobian state of the chord steps (`n x n`, row-major).
@@ -31,6 +32,7 @@ pub(super) struct Broyden {
     h: Vec<f64>,
     /// `DenseLu::factorizations()` that `h` was built from (`None`: not built).
     built_from: Option<u64>,
+    y: Vec<f64>,
     hy: Vec<f64>,
     sh: Vec<f64>,
 }
@@ -41,6 +43,7 @@ impl Broyden {
             n,
             h: vec![0.0; n * n],
             built_from: None,
+            y: vec![0.0; n],
             hy: vec![0.0; n],
             sh: vec![0.0; n],
         }
@@ -75,41 +78,28 @@ impl Broyden {
     }
 
     /// Broyden's inverse update with the accepted step `s = x+ - x` and `y = r+ - r`
-    /// (`r_old`, `r_new`). Skipped when `s^T H y` is too small to divide by.
+    /// (`r_old`, `r_new`): [`inverse_update`] unweighted, skipped when `s^T H y` is
+    /// too small to divide by ([`SkipTest::Angle`]).
     pub fn update(&mut self, s: &[f64], r_old: &[f64], r_new: &[f64]) {
         let n = self.n;
-        // hy = H y
-        for i in 0..n {
-            let row = &self.h[i * n..(i + 1) * n];
-            self.hy[i] = (0..n).map(|c| row[c] * (r_new[c] - r_old[c])).sum();
+        for (y, (a, b)) in self.y.iter_mut().zip(r_new.iter().zip(r_old)) {
+            *y = a - b;
         }
-        // sh = s^T H
-        for c in 0..n {
-            self.sh[c] = (0..n).map(|i| s[i] * self.h[i * n + c]).sum();
-        }
-        let den: f64 = (0..n).map(|i| s[i] * self.hy[i]).sum();
-        let (ns, nhy) = (norm(&s[..n]), norm(&self.hy));
-        if !den.is_finite() || den.abs() <= 1e-12 * ns * nhy || den == 0.0 {
-            return;
-        }
-        for (i, (si, hyi)) in s.iter().zip(&self.hy).enumerate().take(n) {
-            let a = (si - hyi) / den;
-            if a != 0.0 {
-                for (h, sh) in self.h[i * n..(i + 1) * n].iter_mut().zip(&self.sh) {
-                    *h += a * sh;
-                }
-            }
-        }
+        inverse_update(
+            &mut self.h,
+            &s[..n],
+            &self.y,
+            TailWeight::NONE,
+            SkipTest::Angle,
+            &mut self.hy,
+            &mut self.sh,
+        );
     }
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 impl crate::math::warm::WarmCopy for Broyden {
     fn warm_copy_from(&mut self, src: &Self) {
-        crate::math::warm::warm_fields!(self, src, copy: [n, h, built_from, hy, sh], keep: []);
+        crate::math::warm::warm_fields!(self, src, copy: [n, h, built_from, y, hy, sh], keep: []);
     }
 }
 

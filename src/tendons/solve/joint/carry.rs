@@ -73,7 +73,7 @@ impl TendonWorkspace {
 
 #[cfg(test)]
 mod tests {
-    use super::super::jacobian::broyden_update;
+    use crate::math::broyden::{inverse_update, SkipTest, TailWeight};
     use crate::math::DenseLu;
     use crate::Scene;
 
@@ -146,7 +146,15 @@ mod tests {
             }
         }
         let (mut hy, mut sth) = (vec![0.0; m], vec![0.0; m]);
-        broyden_update(&mut tw.joint.h, n, 1.0, &s, &y, &mut hy, &mut sth);
+        inverse_update(
+            &mut tw.joint.h,
+            &s,
+            &y,
+            TailWeight::NONE,
+            SkipTest::StepLength,
+            &mut hy,
+            &mut sth,
+        );
         let updated = inverse(&tw.joint.h, m);
         assert!(rel_diff(&updated, &j0) > 1e-6, "the update changed nothing");
         assert!(tw.joint_carry_to_iterate(n, p));
