@@ -6,7 +6,7 @@
 //! `rho(a) = a^2/2 (a <= k), k a - k^2/2 (a > k)` on the first `rows` residuals.
 //! The step solves the damped normal equations
 //! `(J^T W J + mu diag(J^T W J)) h = -J^T W r` (Marquardt's scaling; Madsen, Nielsen &
-//! Tingleff 2004, algorithm 3.16 with Nielsen's damping update), with `W` the IRLS
+//! Tingleff 2004, algorithm 3.16 with Nielsen's damping update, `math::damping`), with `W` the IRLS
 //! weights `rho'(a)/a` at the current point. Bounds: variables at a bound whose
 //! gradient pushes outwards are held, the others stepped, and the trial point is
 //! projected onto the box (a projected LM; the gain ratio uses the projected step).
@@ -14,6 +14,7 @@
 //! The problem supplies residuals and, optionally, its own Jacobian; the default is
 //! central differences ([`central_differences`]).
 
+use crate::math::damping::{Damping, DampingRule};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -321,8 +322,7 @@ where
         (a, g)
     };
     let (mut a, mut g) = normal(&jac, &r, &w);
-    let mut mu = s.initial_damping;
-    let mut nu = 2.0;
+    let mut damping = Damping::new(DampingRule::Nielsen, s.initial_damping);
     let mut iterations = 0;
     let mut r_new = vec![0.0; m];
     let mut w_new = vec![1.0; m];
@@ -404,14 +404,12 @@ where
             for (j, &kj) in free.iter().enumerate() {
                 damped[(i, j)] = a[(ki, kj)];
             }
-            damped[(i, i)] += mu * a[(ki, ki)].max(1e-12 * dmax);
+            damped[(i, i)] += damping.mu() * a[(ki, ki)].max(1e-12 * dmax);
             rhs[i] = -g[ki];
         }
         let Some(hf) = damped.cholesky().map(|c| c.solve(&rhs)) else {
             last_rejection = Some("the damped normal equations are not positive definite".into());
-            mu *= nu;
-            nu *= 2.0;
-            if !mu.is_finite() || nu > 1e15 {
+            if !damping.rejected() {
                 stall!();
             }
             continue;
@@ -470,13 +468,12 @@ where
                     std::mem::swap(&mut jac, &mut jac_new);
                     cost = cost_new;
                     (a, g) = normal(&jac, &r, &w);
-                    mu *= (1.0f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
-                    nu = 2.0;
+                    damping.accepted(gain);
                     iterations += 1;
                     observer(&LmIteration {
                         iteration: iterations,
                         cost,
-                        damping: mu,
+                        damping: damping.mu(),
                         accepted: true,
                     });
                     if decrease <= s.tolerance * cost.max(f64::MIN_POSITIVE) {
@@ -499,15 +496,14 @@ where
             }
         };
         if !accepted {
-            mu *= nu;
-            nu *= 2.0;
+            let go_on = damping.rejected();
             observer(&LmIteration {
                 iteration: iterations,
                 cost,
-                damping: mu,
+                damping: damping.mu(),
                 accepted: false,
             });
-            if !mu.is_finite() || nu > 1e15 {
+            if !go_on {
                 stall!();
             }
         }

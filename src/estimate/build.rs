@@ -5,6 +5,7 @@ use super::{EstimateError, EstimateStatus, Estimator};
 use crate::error::ModelError;
 use crate::ladder::Rung;
 use crate::loads::Loads;
+use crate::math::damping::{Damping, DampingRule};
 use crate::robot::Robot;
 use crate::scene::estimate::{EstimateSpec, UnknownSpec};
 use crate::settings::SolverSettings;
@@ -106,7 +107,7 @@ impl<M: EstimationModel> Estimator<M> {
             g_exact: false,
             active: vec![false; p],
             infinite_var: vec![false; p],
-            mu: 1e-3,
+            damping: Damping::new(DampingRule::Ratio, 1e-3),
             status: EstimateStatus::NoData,
             iterations: 0,
             jac_evals: 0,

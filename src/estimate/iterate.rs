@@ -114,11 +114,11 @@ impl<M: EstimationModel> Estimator<M> {
         let mut cost = self.cost_at(false);
         let method = self.spec.method;
         // damping never carries over from an earlier (possibly impossible) sample
-        self.mu = if method == Method::LevenbergMarquardt {
+        self.damping.reset(if method == Method::LevenbergMarquardt {
             1e-3
         } else {
             0.0
-        };
+        });
         // scaled size of the last accepted step (contraction estimate below)
         let mut prev_step = f64::INFINITY;
         // accepted steps since the last fresh sensitivity sweep
@@ -170,7 +170,7 @@ impl<M: EstimationModel> Estimator<M> {
                         self.solve_step(0.0);
                     }
                 } else {
-                    self.solve_step(self.mu);
+                    self.solve_step(self.damping.mu());
                 }
                 let mut small = true;
                 let mut size = 0.0f64;
@@ -209,7 +209,9 @@ impl<M: EstimationModel> Estimator<M> {
                     // converged only if the undamped Gauss-Newton model predicts a
                     // negligible decrease (stationary point), else the cost could not
                     // be decreased from a non-stationary point: stalled
-                    if method == Method::LevenbergMarquardt && self.mu > LM_MAX_CONVERGED_DAMPING {
+                    if method == Method::LevenbergMarquardt
+                        && self.damping.mu() > LM_MAX_CONVERGED_DAMPING
+                    {
                         let pred = self.gn_predicted_decrease();
                         if pred > super::STATIONARY_DECREASE + 1e-9 * cost {
                             self.cost = cost;
@@ -241,11 +243,7 @@ impl<M: EstimationModel> Estimator<M> {
                         1.0
                     };
                     if method == Method::LevenbergMarquardt {
-                        if rho > 0.75 {
-                            self.mu = (self.mu / 3.0).max(1e-12);
-                        } else if rho < 0.25 {
-                            self.mu *= 2.0;
-                        }
+                        self.damping.accepted(rho);
                     }
                     if rho < 0.5 && !fresh {
                         self.g_valid = false;
@@ -279,8 +277,7 @@ impl<M: EstimationModel> Estimator<M> {
                     break false;
                 }
                 if method == Method::LevenbergMarquardt {
-                    self.mu = (self.mu * 4.0).max(1e-6);
-                    if self.mu > 1e12 {
+                    if !self.damping.rejected() {
                         self.cost = cost;
                         return EstimateStatus::Stalled;
                     }

@@ -253,7 +253,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
     let mut f = data_cost(est, &est.theta, &est.len);
     let mut h1 = l1(&st.r, tau);
     st.nu = 0.0;
-    est.mu = 1e-3;
+    est.damping.reset(1e-3);
     for it in 0..est.spec.max_iterations {
         est.iterations = it + 1;
         if let Some(b) = est.spec.time_budget_s {
@@ -276,7 +276,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
             if trials > MAX_TRIALS {
                 return conclude(est, st, EstimateStatus::Stalled);
             }
-            est.solve_step(est.mu);
+            est.solve_step(est.damping.mu());
             let mut small = true;
             for k in 0..p {
                 let t = (est.theta[k] + est.step[k] * alpha).clamp(est.lb[k], est.ub[k]);
@@ -285,7 +285,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
                 small &= est.step[k].abs() <= est.spec.tolerance * (1.0 + est.theta[k].abs());
             }
             if small {
-                if est.mu > LM_MAX_CONVERGED_DAMPING
+                if est.damping.mu() > LM_MAX_CONVERGED_DAMPING
                     && est.gn_predicted_decrease() > 1e-9 * (1.0 + f)
                 {
                     return conclude(est, st, EstimateStatus::Stalled);
@@ -304,7 +304,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
                 }
                 // no chord progress: take the full step below (Newton on x with
                 // backtracking on the merit)
-                est.solve_step(est.mu);
+                est.solve_step(est.damping.mu());
                 for k in 0..p {
                     let t = (est.theta[k] + est.step[k] * alpha).clamp(est.lb[k], est.ub[k]);
                     est.theta_trial[k] = t;
@@ -363,11 +363,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
                 } else {
                     1.0
                 };
-                if rho > 0.75 {
-                    est.mu = (est.mu / 3.0).max(1e-12);
-                } else if rho < 0.25 {
-                    est.mu *= 2.0;
-                }
+                est.damping.accepted(rho);
                 std::mem::swap(&mut st.x, &mut st.x_trial);
                 std::mem::swap(&mut st.r, &mut st.r_trial);
                 std::mem::swap(&mut est.len, &mut st.l_trial);
@@ -378,8 +374,7 @@ fn run(est: &mut Estimator, st: &mut JointState, t0: Instant) -> EstimateStatus 
                 h1 = h1t;
                 break;
             }
-            est.mu = (est.mu * 4.0).max(1e-6);
-            if est.mu > 1e12 {
+            if !est.damping.rejected() {
                 return conclude(est, st, EstimateStatus::Stalled);
             }
             if xa > xb {

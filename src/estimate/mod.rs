@@ -71,6 +71,7 @@ pub use tendon::{
 };
 
 use crate::error::ModelError;
+use crate::math::damping::Damping;
 use crate::statics::{Pose, SolveStatus, Workspace};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -256,7 +257,8 @@ pub struct Estimator<M = Workspace> {
     active: Vec<bool>,
     /// Unknowns with unbounded variance (unobservable, no prior).
     infinite_var: Vec<bool>,
-    mu: f64,
+    /// Levenberg-Marquardt damping (trust-ratio rule, `math::damping`).
+    damping: Damping,
     status: EstimateStatus,
     iterations: usize,
     jac_evals: u64,

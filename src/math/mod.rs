@@ -4,10 +4,11 @@
 //! Nothing here knows about rods or robots.
 
 mod banded;
+pub(crate) mod broyden;
+pub(crate) mod damping;
 mod dual;
 mod kernels;
 mod lu;
-pub(crate) mod broyden;
 pub(crate) mod newton;
 mod so3;
 pub(crate) mod step;
