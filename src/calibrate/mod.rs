@@ -30,6 +30,7 @@ mod identify_assign;
 mod jacobian;
 mod lm;
 mod model;
+mod order;
 mod problem;
 mod readings_model;
 mod recording;
@@ -63,12 +64,13 @@ pub use lm::{
     LmIteration, LmResult, LmSettings, LmStatus, STATIONARY_COSINE,
 };
 pub use model::{finite_differences, CalibrationModel, RowFailure, Sensitivities, TensionModel};
+pub use order::{chain_order, row_order};
 pub use readings_model::{ReadingsModel, SceneModel};
 pub use recording::{
     is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow, RowHistory,
 };
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
-pub use run::{calibrate, chain_order, frame_param_names, row_order, CalibrationSetup};
+pub use run::{calibrate, frame_param_names, CalibrationSetup};
 pub use stats::{
     parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,
     CORRELATION_LIMIT, NULL_DIRECTION_LIMIT,

@@ -30,14 +30,11 @@
 //! respect to the shape are not in the Jacobian (they are second order in `mu`
 //! times the change of wrap angle per step).
 
-use super::{capstan_factors, Actuation, TendonMechanics};
+use super::{capstan_factors, TendonMechanics};
 use crate::error::ModelError;
-use crate::loads::Loads;
 use crate::math::DenseLu;
-use crate::robot::Robot;
-use crate::settings::SolverSettings;
 pub use crate::settings::TendonSettings;
-use crate::statics::{ParamSite, SolveStatus, Start, Workspace};
+use crate::statics::{SolveStatus, Start, Workspace};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -58,6 +55,11 @@ mod loads;
 mod diagnose;
 // The budget of one call (`TendonSettings::max_passes`, `time_budget_s`).
 mod budget;
+// Construction and the reference solve at the pretensions.
+mod build;
+// The rollback of a failed solve.
+mod rollback;
+use rollback::Rollback;
 
 /// Outcome of one solve from readings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -136,19 +138,6 @@ pub struct TendonWorkspace {
 
 crate::math::warm::warm_by_copy!(TendonReport);
 
-/// What a [`TendonWorkspace`] keeps to roll a failed solve back (the policy is on
-/// [`TendonWorkspace::set_rollback`]).
-#[derive(Clone)]
-struct Rollback {
-    enabled: bool,
-    /// The whole warm state at the start of the current solve: the state the last
-    /// converged solve left (or the reference), with the caller's changes since.
-    good: Option<Box<TendonWorkspace>>,
-    /// The last solve did not converge: the next solve (or change of the
-    /// workspace) starts from `good`.
-    pending: bool,
-}
-
 impl crate::math::warm::WarmCopy for TendonWorkspace {
     /// The state a solve changes; the tendons' mechanics, columns, reference and the
     /// rollback's own copy are configuration and stay as they are.
@@ -163,178 +152,6 @@ impl crate::math::warm::WarmCopy for TendonWorkspace {
 }
 
 impl TendonWorkspace {
-    /// Build for a robot with displacement-driven tendons: validates, solves the
-    /// reference (every driven tendon at its pretension) and fixes each `L0`.
-    pub fn new(robot: Robot, loads: Loads, settings: SolverSettings) -> Result<Self, ModelError> {
-        Self::with_params(robot, loads, settings, &[])
-    }
-
-    /// Like [`TendonWorkspace::new`] with extra load parameters (after the
-    /// tensions in the inner workspace's `theta`), for estimation.
-    pub fn with_params(
-        robot: Robot,
-        loads: Loads,
-        settings: SolverSettings,
-        extra: &[ParamSite],
-    ) -> Result<Self, ModelError> {
-        let mut driven = Vec::new();
-        let mut mech = Vec::new();
-        let mut columns = Vec::new();
-        let mut geo = Vec::new();
-        let ei = robot.min_bending_stiffness();
-        for (j, c) in robot.cables().iter().enumerate() {
-            let field = format!("robot.cables[{j}]");
-            match c.actuation {
-                Actuation::Displacement => {
-                    if loads.tension(j) != 0.0 {
-                        return Err(ModelError::Invalid {
-                            field: format!("loads.tensions_n[{j}]"),
-                            why: format!(
-                                "cable `{}` is displacement-driven: its tension follows from its reading",
-                                c.name
-                            ),
-                        });
-                    }
-                    let m = c.mechanics.ok_or_else(|| ModelError::Invalid {
-                        field: format!("{field}.tendon.stiffness_n"),
-                        why: "a displacement-driven tendon needs its axial stiffness".into(),
-                    })?;
-                    driven.push(j);
-                    mech.push(m);
-                    columns.push(c.reading.clone());
-                    // the moment arm: the base hole, or a continuous path's largest
-                    // offset (a table's may start on the axis)
-                    let s_end = c.end_s;
-                    let arm = c
-                        .path
-                        .as_ref()
-                        .map_or(c.base_hole.norm(), |p| p.max_radius(s_end));
-                    geo.push((arm.powi(2) * s_end / ei).max(1e-12));
-                }
-                Actuation::Passive => {
-                    if loads.tension(j) != 0.0 {
-                        return Err(ModelError::Invalid {
-                            field: format!("loads.tensions_n[{j}]"),
-                            why: format!(
-                                "cable `{}` is passive (a measuring cable): its tension is 0",
-                                c.name
-                            ),
-                        });
-                    }
-                }
-                Actuation::Tension => {}
-            }
-        }
-        if driven.is_empty() {
-            return Err(ModelError::Invalid {
-                field: "robot.cables".into(),
-                why: "no cable has `actuation = \"displacement\"`: nothing to drive from readings"
-                    .into(),
-            });
-        }
-        let mut params: Vec<ParamSite> = driven
-            .iter()
-            .map(|&j| ParamSite::Tension { cable: j })
-            .collect();
-        params.extend_from_slice(extra);
-        let nc = robot.cables().len();
-        let routes: Vec<usize> = robot.cables().iter().map(|c| c.route.len()).collect();
-        let mu = robot.friction_mu();
-        let friction = robot.spec().friction.clone();
-        let ws = Workspace::with_params(robot, loads, settings, &params)?;
-        let p = driven.len();
-        let np = params.len();
-        let joint = joint::JointBufs::new(ws.unknowns(), p, np, nc);
-        let mut me = Self {
-            joint,
-            ws,
-            columns,
-            free0: vec![0.0; p],
-            free: vec![0.0; p],
-            geo,
-            t: mech.iter().map(|m| m.pretension_n).collect(),
-            t_trial: vec![0.0; p],
-            taut: vec![true; p],
-            taut_before: vec![true; p],
-            g: vec![0.0; p],
-            step: vec![0.0; p],
-            theta: vec![0.0; np],
-            n_extra: extra.len(),
-            sens: vec![0.0; nc * np],
-            lengths: vec![0.0; nc],
-            lu: DenseLu::new(p),
-            sens_fresh: false,
-            mu,
-            friction,
-            sign: vec![0.0; p],
-            last_q: vec![0.0; p],
-            factors: driven.iter().map(|&j| vec![1.0; routes[j]]).collect(),
-            mean_factor: vec![1.0; p],
-            has_solution: false,
-            x_ref: Vec::new(),
-            report: TendonReport {
-                status: SolveStatus::NonFinite,
-                iterations: 0,
-                residual_m: f64::INFINITY,
-                forward_solves: 0,
-                shooting_solves: 0,
-                slack: 0,
-            },
-            driven,
-            mech,
-            rollback: Rollback {
-                enabled: true,
-                good: None,
-                pending: false,
-            },
-            budget: budget::Budget::default(),
-        };
-        me.reference()?;
-        // the rollback's copy: allocated once here, refreshed without allocating
-        me.rollback.good = Some(Box::new(me.clone()));
-        Ok(me)
-    }
-
-    /// Solve at the pretensions with zero readings and set `L0`.
-    fn reference(&mut self) -> Result<(), ModelError> {
-        for (i, m) in self.mech.iter().enumerate() {
-            self.theta[i] = m.pretension_n;
-        }
-        self.ws.set_theta(&self.theta);
-        let rep = self.ws.solve(Start::Cold);
-        if !rep.status.is_converged() {
-            // the reference is the whole scene at q = 0: the pretensions are one of
-            // its inputs, not necessarily the cause (a huge density fails it too)
-            return Err(ModelError::Invalid {
-                field: "tendon reference solve".into(),
-                why: format!(
-                    "the robot at its pretensions (robot.tendons.pretension_n) under the scene's loads, the reference that fixes each tendon's free length, did not solve: {:?}, residual {:.3e}; check the pretensions, the loads and the rod's stiffness, mass and geometry",
-                    rep.status, rep.residual
-                ),
-            });
-        }
-        // every cable's path: the chords through its holes (thesis 3.8.1) or a
-        // continuous tendon's integral along the pass (`statics::pass::continuous`)
-        self.ws.cable_lengths_into(&mut self.lengths);
-        for (i, &j) in self.driven.iter().enumerate() {
-            let l = self.lengths[j];
-            self.free0[i] = self.mech[i].free_length_at_rest(l);
-            if self.free0[i].is_nan() || self.free0[i] <= 0.0 {
-                return Err(ModelError::OutOfRange {
-                    field: format!("robot.cables[{j}].tendon"),
-                    value: self.free0[i],
-                    why: "the pretension and series spring leave no free length".into(),
-                });
-            }
-        }
-        // the reference is the point of zero readings
-        self.free.copy_from_slice(&self.free0);
-        self.x_ref.clear();
-        self.x_ref.extend_from_slice(self.ws.unknowns_vector());
-        self.has_solution = true;
-        Ok(())
-    }
-
     /// Replace the tendon settings (they start as the scene's `numerics.tendons`).
     /// Checked as a scene's are ([`TendonSettings::validate`]): an error names the
     /// field, and the settings in effect stay as they were.
@@ -461,80 +278,6 @@ impl TendonWorkspace {
             }
         }
         Ok(())
-    }
-
-    /// Rollback policy (on by default). On: a solve that does not converge leaves
-    /// the warm state as it was before that solve, i.e. as the last converged solve
-    /// (or the construction's reference solve) left it, with any change the caller
-    /// made since (settings, extra parameters, loads through
-    /// [`TendonWorkspace::workspace_mut`]). The rows after a failed one are then
-    /// bit-identical to the same rows of a stream without it. The failed attempt
-    /// stays readable through the `&self` accessors ([`TendonWorkspace::report`],
-    /// [`TendonWorkspace::tip_position`], [`TendonWorkspace::tensions`],
-    /// [`TendonWorkspace::diagnose`], `workspace_mut().solution()`) until the next
-    /// solve, `set_extra`, `set_tendon_settings` or [`TendonWorkspace::apply_rollback`],
-    /// which first restore the kept state. The cost is one copy per solve of the
-    /// state a later solve reads (no allocation; the pass buffers' scratch is not
-    /// copied: `PassBuf::warm_copy_uncondensed`), about 1 % of a warm FTDCR v4
-    /// row. Off: the next solve starts from wherever the failed one stopped (what a
-    /// caller with its own policy, e.g. an estimator's inner
-    /// iterations, wants). Turning it off drops a pending rollback.
-    /// (Turning it on allocates the kept copy, off frees it.)
-    pub fn set_rollback(&mut self, on: bool) {
-        self.rollback.enabled = on;
-        if on {
-            if self.rollback.good.is_none() {
-                self.rollback.good = Some(Box::new(self.clone()));
-            }
-        } else {
-            self.rollback.pending = false;
-            self.rollback.good = None;
-        }
-    }
-
-    /// This workspace with the rollback off ([`TendonWorkspace::set_rollback`]).
-    pub fn without_rollback(mut self) -> Self {
-        self.set_rollback(false);
-        self
-    }
-
-    /// Whether the rollback policy is on ([`TendonWorkspace::set_rollback`]).
-    pub fn rollback(&self) -> bool {
-        self.rollback.enabled
-    }
-
-    /// The last solve did not converge and its warm state will be replaced by the
-    /// kept one at the next `&mut` call ([`TendonWorkspace::set_rollback`]).
-    pub fn rollback_pending(&self) -> bool {
-        self.rollback.pending
-    }
-
-    /// Restore the kept state now if a rollback is pending (no allocation).
-    pub fn apply_rollback(&mut self) {
-        use crate::math::warm::WarmCopy;
-        if !self.rollback.pending {
-            return;
-        }
-        self.rollback.pending = false;
-        if let Some(good) = self.rollback.good.take() {
-            WarmCopy::warm_copy_from(self, &*good);
-            self.rollback.good = Some(good);
-            // what the copy leaves out is not read before it is written again:
-            // debug builds check it (NaN there would reach the results)
-            if cfg!(debug_assertions) {
-                self.ws.poison_uncopied();
-                self.joint.poison_scratch();
-            }
-        }
-    }
-
-    /// Keep the current state as the one to return to (no allocation).
-    fn keep_state(&mut self) {
-        use crate::math::warm::WarmCopy;
-        if let Some(mut good) = self.rollback.good.take() {
-            WarmCopy::warm_copy_from(&mut *good, &*self);
-            self.rollback.good = Some(good);
-        }
     }
 
     /// [`TendonWorkspace::solve_readings`] with a chosen start (`Cold` restarts the
