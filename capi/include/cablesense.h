@@ -444,6 +444,19 @@ enum CsCode cs_tendons_ik_configure(struct CsTendons *t, const struct CsIkSettin
 // `t` is a live handle; `readings` holds `n` doubles.
 enum CsCode cs_tendons_ik_start(struct CsTendons *t, const double *readings, size_t n);
 
+// Tensions `tensions[n]` (N) and, unless null, taut flags `taut[n]` (1 taut, 0
+// slack) of the driven tendons at the readings of the last [`cs_tendons_ik`] (or
+// [`cs_tendons_ik_start`]), `n` = [`cs_tendons_count`]: e.g. to check the
+// least-tension objective's choice. `CS_CODE_BAD_ARGUMENT` before the inverse
+// solver exists. No allocation.
+//
+// # Safety
+// `t` is a live handle; `tensions` (and `taut` unless null) hold `n` elements.
+enum CsCode cs_tendons_ik_tensions(const struct CsTendons *t,
+                                   double *tensions,
+                                   int32_t *taut,
+                                   size_t n);
+
 // Inverse kinematics: the readings `readings[n]` (m, one per driven tendon, `n` =
 // [`cs_tendons_count`]) that put the tip at `target[3]` (m, base frame), and its
 // axis along `direction[3]` (any non-zero length; null: position only), inside the

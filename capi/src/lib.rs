@@ -11,7 +11,8 @@
 //!   flags, tip position, section end poses and cable path lengths; and the
 //!   inverse: [`cs_tendons_ik`], the readings that put the tip at a target within
 //!   the scene's `[robot.limits]` (`cablesense::command::IkWorkspace`, warm from the
-//!   previous call, its own state beside the readings solves').
+//!   previous call, its own state beside the readings solves'; the tensions there:
+//!   [`cs_tendons_ik_tensions`]).
 //!
 //! Every entry point returns a [`CsCode`] (0 = OK) and catches panics
 //! (`catch_unwind`), so no unwind crosses the boundary; the message of the last
@@ -1246,6 +1247,45 @@ pub unsafe extern "C" fn cs_tendons_ik_start(
         // SAFETY: n doubles per the contract.
         let q = unsafe { std::slice::from_raw_parts(readings, n) };
         h.ik(None)?.set_readings(q).map_err(|e| bad(e.to_string()))
+    })
+}
+
+/// Tensions `tensions[n]` (N) and, unless null, taut flags `taut[n]` (1 taut, 0
+/// slack) of the driven tendons at the readings of the last [`cs_tendons_ik`] (or
+/// [`cs_tendons_ik_start`]), `n` = [`cs_tendons_count`]: e.g. to check the
+/// least-tension objective's choice. `CS_CODE_BAD_ARGUMENT` before the inverse
+/// solver exists. No allocation.
+///
+/// # Safety
+/// `t` is a live handle; `tensions` (and `taut` unless null) hold `n` elements.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_ik_tensions(
+    t: *const CsTendons,
+    tensions: *mut f64,
+    taut: *mut i32,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_ref() }.ok_or_else(|| bad("tendons is null"))?;
+        let p = h.readings.len();
+        if n != p {
+            return Err(bad(format!("n = {n} for {p} displacement-driven tendons")));
+        }
+        let ik = h.ik.as_deref().ok_or_else(|| {
+            bad("no inverse solve yet: call cs_tendons_ik (or cs_tendons_ik_configure) first")
+        })?;
+        let ws = ik.tendon_workspace();
+        // SAFETY: n doubles per the contract.
+        unsafe { out_slice(tensions, n)? }.copy_from_slice(ws.tensions());
+        if !taut.is_null() {
+            // SAFETY: n ints per the contract (checked non-null).
+            let flags = unsafe { std::slice::from_raw_parts_mut(taut, n) };
+            for (f, &k) in flags.iter_mut().zip(ws.taut()) {
+                *f = i32::from(k);
+            }
+        }
+        Ok(())
     })
 }
 

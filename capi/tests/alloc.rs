@@ -244,9 +244,10 @@ fn tendon_readers_do_not_allocate_and_the_solve_adds_none() {
     }
 }
 
-/// `cs_tendons_ik` on the calibrated FTDCR v4, targets = the model's tips at
-/// consecutive val rows (as the library's `tests/ik_alloc.rs`): after 10 warm-up
-/// calls, 40 warm calls allocate exactly what the library's `IkWorkspace::solve`
+/// `cs_tendons_ik` (and the `cs_tendons_ik_tensions` reader after it) on the
+/// calibrated FTDCR v4, targets = the model's tips at consecutive val rows (as the
+/// library's `tests/ik_alloc.rs`): after 10 warm-up calls, 40 warm calls allocate
+/// exactly what the library's `IkWorkspace::solve`
 /// allocates for the same targets (the C layer adds none), and at most the
 /// library test's ceiling: clarabel's `solve` allocates once per QP today (at most
 /// 8 per QP there) plus 10. Once the library's warm tick allocates nothing, the
@@ -263,6 +264,7 @@ fn ik_warm_calls_allocate_no_more_than_the_library() {
     let text = scene("data/calibration/ftdcr_v4_calibrated.toml");
     let mut t = std::ptr::null_mut();
     let (mut q, mut info) = ([0.0; 9], CsIkInfo::default());
+    let (mut tension, mut taut) = ([0.0; 9], [0i32; 9]);
     let (mut abi, mut library, mut qps) = (0, 0, 0);
     // SAFETY: valid string and out pointer; the handle lives until the free below;
     // buffers of the stated sizes.
@@ -280,6 +282,8 @@ fn ik_warm_calls_allocate_no_more_than_the_library() {
                 9,
                 &mut info,
             );
+            assert_eq!(code, CsCode::Ok, "{}", last_error());
+            let code = cs_tendons_ik_tensions(t, tension.as_mut_ptr(), taut.as_mut_ptr(), 9);
             let n_abi = allocs() - before;
             assert_eq!(code, CsCode::Ok, "{}", last_error());
             let goal = IkTarget::position(*target);

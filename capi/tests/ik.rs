@@ -129,6 +129,39 @@ fn the_abi_returns_the_librarys_readings_and_reaches_the_model_tips() {
     }
     let (_, info) = ik(t, &targets[29], None);
     assert_eq!((info.status, info.objective), (0, 1), "{info:?}");
+    // the tensions at the returned readings: the library's
+    lib.set_settings(IkSettings {
+        objective: cablesense::command::IkObjective::LeastPull,
+        ..IkSettings::default()
+    })
+    .unwrap();
+    lib.solve(&IkTarget::position(targets[29].into())).unwrap();
+    let (mut tension, mut taut) = ([0.0; 9], [0i32; 9]);
+    // SAFETY: live handle; buffers of 9.
+    unsafe {
+        let code = cs_tendons_ik_tensions(t, tension.as_mut_ptr(), taut.as_mut_ptr(), 9);
+        assert_eq!(code, CsCode::Ok, "{}", last_error());
+    }
+    assert_eq!(tension.to_vec(), lib.tendon_workspace().tensions());
+    let flags: Vec<bool> = taut.iter().map(|f| *f == 1).collect();
+    assert_eq!(flags, lib.tendon_workspace().taut());
+    assert_eq!(info.slack as usize, flags.iter().filter(|f| !**f).count());
+    // a direction target: the library's result bit for bit, and reached
+    let axis = lib.tip_axis();
+    let with = IkTarget {
+        position_m: targets[29].into(),
+        direction: Some(axis * 2.0),
+    };
+    let (q, info) = ik(
+        t,
+        &targets[29],
+        Some(&[2.0 * axis.x, 2.0 * axis.y, 2.0 * axis.z]),
+    );
+    let r = lib.solve(&with).unwrap();
+    assert_eq!(q.to_vec(), lib.readings());
+    assert_eq!(info.angle_rad.to_bits(), r.angle_rad.to_bits());
+    assert_eq!(info.status, 0, "{info:?}");
+    assert!(info.angle_rad <= 1e-3, "{info:?}");
     // SAFETY: owned handle.
     unsafe { cs_tendons_free(t) };
 }
@@ -245,6 +278,17 @@ fn unreachable_targets_are_a_status_and_bad_calls_change_nothing() {
             "{}",
             last_error()
         );
+        // no inverse solve on a fresh handle yet: the tensions reader says so
+        let fresh = handle();
+        let mut tension = [0.0; 9];
+        let code = cs_tendons_ik_tensions(fresh, tension.as_mut_ptr(), std::ptr::null_mut(), 9);
+        assert_eq!(code, CsCode::BadArgument);
+        assert!(
+            last_error().contains("no inverse solve yet"),
+            "{}",
+            last_error()
+        );
+        cs_tendons_free(fresh);
         let out = [0.02, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         assert_eq!(cs_tendons_ik_start(b, out.as_ptr(), 9), CsCode::BadArgument);
         assert!(last_error().contains("servo_4_mm") && last_error().contains("actuator limits"));

@@ -134,6 +134,14 @@ def test_bad_targets_name_the_argument(ftdcr):
     assert e.value.field == "directions"
     with pytest.raises(TypeError, match=r"shape \(n, 3\)"):
         ik.ik_many(np.zeros(3))
+    # a dtype numpy cannot make floats of
+    with pytest.raises(TypeError, match="targets: .*numpy cannot convert"):
+        ik.ik_many(np.array([["a", "b", "c"]]))
+    with pytest.raises(TypeError, match="target: expected 3 coordinates"):
+        ik.ik(np.array(["a", "b", "c"]))
+    # integers are numbers: an int array is a target like any other
+    _, res = ik.ik(np.array([0, 0, 1]))
+    assert res["status"] == "unreachable", res
     # start readings outside the limits: ReadingsError naming the reading
     with pytest.raises(cablesense.ReadingsError) as e:
         ik.set_readings([0.02] + [0.0] * 8)

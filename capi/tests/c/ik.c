@@ -4,6 +4,7 @@
  * warm from the previous row, and those readings are solved forward again. Then a
  * target 10 cm beyond the straight tip (outside the workspace) and bad calls.
  * Usage: ik SCENE.toml ROWS.txt. Prints
+ *   "ik tensions (N): ..." (cs_tendons_ik_tensions at the last row's readings),
  *   "rows N reached R within_50um W resolved_50um V max_um M",
  *   "unreachable status S distance_mm D", and "bad call (what): message" lines. */
 #include "cablesense.h"
@@ -85,6 +86,17 @@ int main(int argc, char **argv) {
         if (cs_tendons_solve(t, out, p, 1, &fwd) == CS_CODE_OK && fwd.status == 0
             && cs_tendons_tip_position(t, again) == CS_CODE_OK && dist(again, tip) <= 5e-5)
             resolved++;
+    }
+    /* the tensions at the last readings found, and how many are slack */
+    {
+        double tension[MAXT];
+        int32_t taut[MAXT];
+        size_t slack = 0;
+        if (cs_tendons_ik_tensions(t, tension, taut, p) != CS_CODE_OK) return 1;
+        for (i = 0; i < p; i++) slack += taut[i] == 0;
+        printf("ik tensions (N): first %.3f slack %lu of %lu (info %u)\n", tension[0],
+               (unsigned long)slack, (unsigned long)p, info.slack);
+        if (slack != info.slack) return 1;
     }
     printf("rows %lu reached %lu within_50um %lu resolved_50um %lu max_um %.3f\n",
            (unsigned long)n, (unsigned long)reached, (unsigned long)within,
