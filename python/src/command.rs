@@ -534,8 +534,11 @@ const SAMPLE_STATUS: [SampleStatus; 4] = [
 /// solve is warm, on `threads` threads (0: every core; the result does not depend
 /// on it), with the GIL released. `progress(done)` (optional) is called with the
 /// number of samples done after each one (from the sampling threads; an exception it
-/// raises is raised after the sampling). Returns {columns [p], limits (p, 2) m,
-/// readings (n, p) m, tips (n, 3) m (NaN for a sample that did not solve), status
+/// raises is raised after the sampling). `marker_offset` (3,) m, a point fixed to
+/// the tip body in its local frame (e.g. a calibration's `marker_offset_m`): each
+/// solved sample records that point too, in `markers`, to set a recording's measured
+/// markers against. Returns {columns [p], limits (p, 2) m, readings (n, p) m, tips
+/// (n, 3) m (NaN for a sample that did not solve), markers (n, 3) m or None, status
 /// (n,) uint8 (index into status_names: converged, converged_stepped,
 /// converged_cold, failed), solved (n,) bool, solved_count, failed_count,
 /// sampling_s, hull_volume_m3 (the convex hull of the solved tips; None when it has
@@ -546,18 +549,38 @@ const SAMPLE_STATUS: [SampleStatus; 4] = [
 /// (servo_4_mm)`, `workspace.samples`). The calibrated FTDCR v4 took about 67 ms a
 /// sample on a shared 2-core machine (docs/command.md).
 #[pyfunction]
-#[pyo3(signature = (scene, samples = 20_000, threads = 0, progress = None))]
+#[pyo3(signature = (scene, samples = 20_000, threads = 0, progress = None, marker_offset = None))]
 pub(crate) fn workspace<'py>(
     py: Python<'py>,
     scene: &Scene,
     samples: usize,
     threads: usize,
     progress: Option<Bound<'py, PyAny>>,
+    marker_offset: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
+    let marker_offset_m = match marker_offset {
+        Some(m) => {
+            let mut buf = Vec::with_capacity(3);
+            read_f64s(m, &mut buf, "marker_offset", || "3 coordinates (m)".into())?;
+            if buf.len() != 3 {
+                return Err(scene_err(
+                    py,
+                    format!(
+                        "marker_offset: expected 3 coordinates (m), got {} values",
+                        buf.len()
+                    ),
+                    Some("workspace.marker_offset_m".into()),
+                ));
+            }
+            Some(Vector3::new(buf[0], buf[1], buf[2]))
+        }
+        None => None,
+    };
     let settings = WorkspaceSettings {
         samples,
         threads,
+        marker_offset_m,
         ..WorkspaceSettings::default()
     };
     settings.validate().map_err(|e| from_model_error(py, e))?;
@@ -611,6 +634,16 @@ pub(crate) fn workspace<'py>(
         .flat_map(|t| t.iter().copied())
         .collect();
     d.set_item("tips", PyArray1::from_vec(py, tips).reshape([n, 3])?)?;
+    if marker_offset_m.is_some() {
+        let m: Vec<f64> = cloud
+            .markers_m
+            .iter()
+            .flat_map(|t| t.iter().copied())
+            .collect();
+        d.set_item("markers", PyArray1::from_vec(py, m).reshape([n, 3])?)?;
+    } else {
+        d.set_item("markers", None::<Vec<f64>>)?;
+    }
     let codes: Vec<u8> = cloud
         .status
         .iter()

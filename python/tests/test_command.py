@@ -233,9 +233,14 @@ def test_workspace_returns_the_cloud_and_its_hull():
     assert np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0 == pytest.approx(vol, rel=1e-9)
     # progress: once per sample
     assert len(seen) == n and max(seen) == n
-    # the result does not depend on the threads
-    one = cablesense.workspace(scene, samples=120, threads=1)
+    assert ws["markers"] is None
+    # the result does not depend on the threads; a marker 25 mm along the tip axis
+    one = cablesense.workspace(scene, samples=120, threads=1, marker_offset=[0.0, 0.0, 0.025])
     assert np.array_equal(one["tips"], ws["tips"], equal_nan=True)
+    markers = one["markers"]
+    assert markers is not None and markers.shape == (n, 3)
+    gap = np.linalg.norm(markers - one["tips"], axis=1)[one["solved"]]
+    assert np.allclose(gap, 0.025, atol=1e-12), gap
 
 
 def test_workspace_errors_name_the_field():
@@ -252,5 +257,8 @@ def test_workspace_errors_name_the_field():
     def stop(done: int) -> None:
         raise RuntimeError(f"stop at {done}")
 
+    with pytest.raises(cablesense.SceneError) as e:
+        cablesense.workspace(scene, samples=5, marker_offset=[0.0, math.nan, 0.0])
+    assert e.value.field is not None and "marker_offset" in e.value.field
     with pytest.raises(RuntimeError, match="stop at 1"):
         cablesense.workspace(scene, samples=5, threads=1, progress=stop)

@@ -296,10 +296,12 @@ def workspace(
     samples: int = 20000,
     threads: int = 0,
     progress: Optional[Callable[[int], object]] = None,
+    marker_offset: Optional[_Floats] = None,
 ) -> WorkspaceCloud:
     """The reachable tips of the actuator box of ``[robot.limits]`` (``samples``
     Halton points, warm chains, ``threads`` threads, 0: every core) and their convex
-    hull. ``progress(done)`` is called after each sample."""
+    hull. ``progress(done)`` is called after each sample; with ``marker_offset`` (m,
+    tip frame) also the ``markers`` of every sample."""
 
 def calibrate(
     scene: Scene,

@@ -201,7 +201,8 @@ class IkBatch(TypedDict):
 class WorkspaceCloud(TypedDict):
     """``workspace``: the sampled actuator box and its tips. ``columns`` [p];
     ``limits`` (p, 2) m; ``readings`` (n, p) m; ``tips`` (n, 3) m (NaN for a sample
-    that did not solve); ``status`` (n,) uint8, an index into ``status_names``
+    that did not solve); ``markers`` (n, 3) m, the ``marker_offset`` point of each
+    sample (None without one); ``status`` (n,) uint8, an index into ``status_names``
     (converged, converged_stepped, converged_cold, failed); ``solved`` (n,);
     ``solved_count``, ``failed_count``; ``sampling_s``; ``hull_volume_m3`` of the
     convex hull of the solved tips (None when it has no volume: ``hull_error``
@@ -212,6 +213,7 @@ class WorkspaceCloud(TypedDict):
     limits: FloatArray
     readings: FloatArray
     tips: FloatArray
+    markers: Optional[FloatArray]
     status: npt.NDArray[np.uint8]
     status_names: List[str]
     solved: BoolArray
