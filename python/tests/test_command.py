@@ -69,6 +69,19 @@ def test_ik_of_the_model_tip_reproduces_it(ftdcr):
     assert batch["errors"] == [None] * 12
 
 
+def test_the_batch_is_the_calls_one_by_one(ftdcr):
+    tips, _, _ = model_rows(ftdcr, 8)
+    a, b = cablesense.IkSolver(ftdcr), cablesense.IkSolver(ftdcr)
+    batch = a.ik_many(tips)
+    for i, tip in enumerate(tips):
+        readings, res = b.ik(tip)
+        assert np.array_equal(batch["readings"][i], readings), i
+        assert batch["distance_m"][i] == res["distance_m"]
+        assert batch["status"][i] == res["status"]
+        assert batch["iterations"][i] == res["iterations"]
+    assert np.array_equal(a.readings, b.readings)
+
+
 def test_a_target_outside_the_workspace_is_unreachable_not_an_exception(ftdcr):
     ik = cablesense.IkSolver(ftdcr)
     start = ik.tip.copy()
