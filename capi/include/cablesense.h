@@ -11,7 +11,9 @@
  * Per tick, cs_estimator_tick, cs_estimator_values, cs_estimator_tip_position and
  * cs_estimator_cable_lengths do not allocate after the first tick, nor do
  * cs_tendons_tensions, cs_tendons_tip_position, cs_tendons_cable_lengths and a
- * warm cs_tendons_solve; cs_model_tip_pose,
+ * warm cs_tendons_solve; a warm cs_tendons_ik (inverse kinematics) adds nothing
+ * to what the library's inverse solve allocates (its QP solver, once per step,
+ * until the library removes that); cs_model_tip_pose,
  * cs_model_section_poses and cs_tendons_section_poses recompute the shape and
  * allocate.
  *
@@ -87,6 +89,62 @@ typedef struct CsTendonInfo {
   // `max_i |G_i|`, the length mismatch of the tendon conditions (m).
   double residual_m;
 } CsTendonInfo;
+
+// Settings of the inverse solve ([`cs_tendons_ik`]; the library's `IkSettings`,
+// whose documentation has the details). [`cs_ik_settings_default`] fills the
+// defaults.
+typedef struct CsIkSettings {
+  // Secondary objective that chooses among the solutions: 0 closest (readings
+  // closest to the call's start; default), 1 least pull (least total pull), 2
+  // least tension (least sum of squared tensions).
+  int32_t objective;
+  // Weight of the secondary objective (>= 0, dimensionless). Default 1e-6.
+  double secondary_weight;
+  // A tip within this distance of the target is reached (m, > 0). Default 1e-5.
+  double tolerance_m;
+  // A direction within this angle of the target's is reached (rad, > 0).
+  // Default 1e-3.
+  double angle_tolerance_rad;
+  // A direction error of 1 rad counts as this much position error (m, > 0).
+  // Default 0.01.
+  double direction_weight_m;
+  // Largest change of any reading in a call's first step (m, > 0). Default 0.002.
+  double trust_radius_m;
+  // Gauss-Newton iterations per call (>= 1). Default 30.
+  uint32_t max_iterations;
+  // Forward solves per call (>= 1). Default 100.
+  uint32_t max_forward_solves;
+} CsIkSettings;
+
+// Outcome of an inverse solve ([`cs_tendons_ik`]; the library's `IkReport`).
+typedef struct CsIkInfo {
+  // 0 reached; 1 unreachable (the closest tip found, at a constrained stationary
+  // point: the target is outside the workspace); 2 budget exhausted (the best
+  // readings found). The readings are usable (inside the limits) in every case.
+  int32_t status;
+  // The secondary objective that chose the solution (as
+  // [`CsIkSettings::objective`]).
+  int32_t objective;
+  // Gauss-Newton iterations.
+  uint32_t iterations;
+  // Jacobians evaluated (the other iterations use Broyden updates).
+  uint32_t jacobians;
+  // Forward (readings) solves.
+  uint32_t forward_solves;
+  // Bounded least-squares steps solved.
+  uint32_t qp_solves;
+  // Tendons slack at the returned readings.
+  uint32_t slack;
+  // Tip at the returned readings (m).
+  double tip_m[3];
+  // Distance of that tip to the target (m).
+  double distance_m;
+  // Angle between the tip axis and the target direction (rad; 0 without one).
+  double angle_rad;
+  // First-order measure at the last linearisation (0 at a constrained
+  // stationary point; NaN when none was built).
+  double first_order;
+} CsIkInfo;
 
 #ifdef __cplusplus
 extern "C" {
@@ -351,6 +409,81 @@ enum CsCode cs_tendons_section_poses(struct CsTendons *t,
                                      double *positions,
                                      double *rotations,
                                      size_t n);
+
+// The default inverse-solve settings into `*out`.
+//
+// # Safety
+// `out` is writable.
+enum CsCode cs_ik_settings_default(struct CsIkSettings *out);
+
+// Actuator limits of the driven tendons (the scene's `[robot.limits]`, m):
+// `min[n]`, `max[n]`, `n` = [`cs_tendons_count`]; `-inf`/`inf` where the scene sets
+// none. No allocation.
+//
+// # Safety
+// `t` is a live handle; `min` and `max` hold `n` writable doubles.
+enum CsCode cs_tendons_limits(const struct CsTendons *t, double *min, double *max, size_t n);
+
+// Set up the inverse solver of [`cs_tendons_ik`] with `settings` (null: the
+// defaults). The first call builds it (allocates; a copy of the handle's readings
+// model, with its budget of [`cs_tendons_set_budget`] at that time, solved at zero
+// readings); a later one replaces the settings and keeps its warm state. A bad
+// value is `CS_CODE_BAD_ARGUMENT` naming the field (`ik.tolerance_m ...`) and
+// changes nothing.
+//
+// # Safety
+// `t` is a live handle; `settings` is null or readable.
+enum CsCode cs_tendons_ik_configure(struct CsTendons *t, const struct CsIkSettings *settings);
+
+// Move the start of the next [`cs_tendons_ik`] to `readings[n]` (m, inside the
+// limits): one forward solve (building the inverse solver with the defaults if
+// there is none yet). A reading outside the limits or not finite is
+// `CS_CODE_BAD_ARGUMENT` naming it (`readings[0] (servo_4_mm) ...`).
+//
+// # Safety
+// `t` is a live handle; `readings` holds `n` doubles.
+enum CsCode cs_tendons_ik_start(struct CsTendons *t, const double *readings, size_t n);
+
+// Tensions `tensions[n]` (N) and, unless null, taut flags `taut[n]` (1 taut, 0
+// slack) of the driven tendons at the readings of the last [`cs_tendons_ik`] (or
+// [`cs_tendons_ik_start`]), `n` = [`cs_tendons_count`]: e.g. to check the
+// least-tension objective's choice. `CS_CODE_BAD_ARGUMENT` before the inverse
+// solver exists. No allocation.
+//
+// # Safety
+// `t` is a live handle; `tensions` (and `taut` unless null) hold `n` elements.
+enum CsCode cs_tendons_ik_tensions(const struct CsTendons *t,
+                                   double *tensions,
+                                   int32_t *taut,
+                                   size_t n);
+
+// Inverse kinematics: the readings `readings[n]` (m, one per driven tendon, `n` =
+// [`cs_tendons_count`]) that put the tip at `target[3]` (m, base frame), and its
+// axis along `direction[3]` (any non-zero length; null: position only), inside the
+// scene's `[robot.limits]`, warm from the previous call (or from
+// [`cs_tendons_ik_start`]; the first call starts at zero readings). The outcome is
+// in `*info` (may be null): a target outside the workspace is status 1
+// (unreachable) with the closest tip found, not an error. A NaN or infinite
+// target or direction, a zero-length direction or a wrong `n` is
+// `CS_CODE_BAD_ARGUMENT` with a message naming it (`target.position_m[2] ...`,
+// `target.direction ...`) and changes nothing. The first call builds the inverse
+// solver with the defaults unless [`cs_tendons_ik_configure`] did (allocates);
+// after it the call allocates nothing of its own (the library's bounded
+// least-squares step, clarabel, allocates once per step until the library removes
+// that: `capi/tests/alloc.rs`). The handle's readings solves
+// ([`cs_tendons_solve`], [`cs_tendons_tip_position`], ...) are not affected: the
+// inverse solver keeps its own state; `info->tip_m` is the tip at the returned
+// readings.
+//
+// # Safety
+// `t` is a live handle; `target` holds 3 doubles; `direction` is null or holds 3
+// doubles; `readings` holds `n` writable doubles; `info` is null or writable.
+enum CsCode cs_tendons_ik(struct CsTendons *t,
+                          const double *target,
+                          const double *direction,
+                          double *readings,
+                          size_t n,
+                          struct CsIkInfo *info);
 
 #ifdef __cplusplus
 }  // extern "C"

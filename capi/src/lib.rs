@@ -8,7 +8,11 @@
 //!   and the predicted cable lengths;
 //! * [`CsTendons`]: a robot with displacement-driven tendons solved from servo
 //!   readings (warm-started from the previous row), then read the tensions, taut
-//!   flags, tip position, section end poses and cable path lengths.
+//!   flags, tip position, section end poses and cable path lengths; and the
+//!   inverse: [`cs_tendons_ik`], the readings that put the tip at a target within
+//!   the scene's `[robot.limits]` (`cablesense::command::IkWorkspace`, warm from the
+//!   previous call, its own state beside the readings solves'; the tensions there:
+//!   [`cs_tendons_ik_tensions`]).
 //!
 //! Every entry point returns a [`CsCode`] (0 = OK) and catches panics
 //! (`catch_unwind`), so no unwind crosses the boundary; the message of the last
@@ -19,7 +23,8 @@
 //! [`cs_estimator_cable_lengths`] do not allocate (LM and Gauss-Newton methods;
 //! `capi/tests/alloc.rs` counts), nor do [`cs_tendons_tensions`],
 //! [`cs_tendons_tip_position`] and [`cs_tendons_cable_lengths`];
-//! nor does a warm [`cs_tendons_solve`]; [`cs_model_section_poses`], [`cs_model_tip_pose`] and
+//! nor does a warm [`cs_tendons_solve`], nor [`cs_tendons_ik`] beyond what the
+//! library's inverse solve allocates (`capi/tests/alloc.rs`); [`cs_model_section_poses`], [`cs_model_tip_pose`] and
 //! [`cs_tendons_section_poses`] recompute the shape and allocate.
 //!
 //! Threads: a handle is used by one thread at a time. Calls on the same handle from
@@ -39,7 +44,10 @@
 //! The header `capi/include/cablesense.h` is generated from this file by cbindgen
 //! (`capi/cbindgen.toml`); `capi/tests/header.rs` fails when it is out of date.
 
+use cablesense::command::{IkObjective, IkSettings, IkStatus, IkTarget, IkWorkspace};
 use cablesense::estimate::{EstimateStatus, Estimator};
+use cablesense::nalgebra::Vector3;
+use cablesense::robot::ActuatorLimits;
 use cablesense::tendons::TendonWorkspace;
 use cablesense::{Scene, SolveStatus, Start, Workspace};
 use std::cell::RefCell;
@@ -104,6 +112,119 @@ pub struct CsTendonInfo {
     pub residual_m: f64,
 }
 
+/// Settings of the inverse solve ([`cs_tendons_ik`]; the library's `IkSettings`,
+/// whose documentation has the details). [`cs_ik_settings_default`] fills the
+/// defaults.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CsIkSettings {
+    /// Secondary objective that chooses among the solutions: 0 closest (readings
+    /// closest to the call's start; default), 1 least pull (least total pull), 2
+    /// least tension (least sum of squared tensions).
+    pub objective: i32,
+    /// Weight of the secondary objective (>= 0, dimensionless). Default 1e-6.
+    pub secondary_weight: f64,
+    /// A tip within this distance of the target is reached (m, > 0). Default 1e-5.
+    pub tolerance_m: f64,
+    /// A direction within this angle of the target's is reached (rad, > 0).
+    /// Default 1e-3.
+    pub angle_tolerance_rad: f64,
+    /// A direction error of 1 rad counts as this much position error (m, > 0).
+    /// Default 0.01.
+    pub direction_weight_m: f64,
+    /// Largest change of any reading in a call's first step (m, > 0). Default 0.002.
+    pub trust_radius_m: f64,
+    /// Gauss-Newton iterations per call (>= 1). Default 30.
+    pub max_iterations: u32,
+    /// Forward solves per call (>= 1). Default 100.
+    pub max_forward_solves: u32,
+}
+
+/// The code of an objective in [`CsIkSettings::objective`] and [`CsIkInfo`].
+fn objective_code(o: IkObjective) -> i32 {
+    match o {
+        IkObjective::Closest => 0,
+        IkObjective::LeastPull => 1,
+        IkObjective::LeastTension => 2,
+    }
+}
+
+impl From<&IkSettings> for CsIkSettings {
+    fn from(s: &IkSettings) -> Self {
+        Self {
+            objective: objective_code(s.objective),
+            secondary_weight: s.secondary_weight,
+            tolerance_m: s.tolerance_m,
+            angle_tolerance_rad: s.angle_tolerance_rad,
+            direction_weight_m: s.direction_weight_m,
+            trust_radius_m: s.trust_radius_m,
+            max_iterations: s.max_iterations.min(u32::MAX as usize) as u32,
+            max_forward_solves: s.max_forward_solves.min(u32::MAX as usize) as u32,
+        }
+    }
+}
+
+impl CsIkSettings {
+    /// The library's settings (checked: the error names the field).
+    fn to_settings(self) -> Result<IkSettings, (CsCode, String)> {
+        let objective = match self.objective {
+            0 => IkObjective::Closest,
+            1 => IkObjective::LeastPull,
+            2 => IkObjective::LeastTension,
+            o => {
+                return Err(bad(format!(
+                    "ik.objective = {o}: give 0 (closest), 1 (least pull) or 2 (least tension)"
+                )))
+            }
+        };
+        let s = IkSettings {
+            objective,
+            secondary_weight: self.secondary_weight,
+            tolerance_m: self.tolerance_m,
+            angle_tolerance_rad: self.angle_tolerance_rad,
+            direction_weight_m: self.direction_weight_m,
+            trust_radius_m: self.trust_radius_m,
+            max_iterations: self.max_iterations as usize,
+            max_forward_solves: self.max_forward_solves as usize,
+            ..IkSettings::default()
+        };
+        s.validate().map_err(|e| bad(e.to_string()))?;
+        Ok(s)
+    }
+}
+
+/// Outcome of an inverse solve ([`cs_tendons_ik`]; the library's `IkReport`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CsIkInfo {
+    /// 0 reached; 1 unreachable (the closest tip found, at a constrained stationary
+    /// point: the target is outside the workspace); 2 budget exhausted (the best
+    /// readings found). The readings are usable (inside the limits) in every case.
+    pub status: i32,
+    /// The secondary objective that chose the solution (as
+    /// [`CsIkSettings::objective`]).
+    pub objective: i32,
+    /// Gauss-Newton iterations.
+    pub iterations: u32,
+    /// Jacobians evaluated (the other iterations use Broyden updates).
+    pub jacobians: u32,
+    /// Forward (readings) solves.
+    pub forward_solves: u32,
+    /// Bounded least-squares steps solved.
+    pub qp_solves: u32,
+    /// Tendons slack at the returned readings.
+    pub slack: u32,
+    /// Tip at the returned readings (m).
+    pub tip_m: [f64; 3],
+    /// Distance of that tip to the target (m).
+    pub distance_m: f64,
+    /// Angle between the tip axis and the target direction (rad; 0 without one).
+    pub angle_rad: f64,
+    /// First-order measure at the last linearisation (0 at a constrained
+    /// stationary point; NaN when none was built).
+    pub first_order: f64,
+}
+
 /// Forward model handle.
 pub struct CsModel {
     ws: Workspace,
@@ -125,6 +246,38 @@ pub struct CsTendons {
     /// Readings column names, NUL-terminated ([`cs_tendons_column_name`]).
     columns: Vec<CString>,
     readings: Vec<f64>,
+    /// The scene's `[robot.limits]` (m; unbounded without).
+    limits: ActuatorLimits,
+    /// The inverse solver, built by the first [`cs_tendons_ik_configure`] or
+    /// [`cs_tendons_ik`] (its own forward model and warm state).
+    ik: Option<Box<IkWorkspace>>,
+}
+
+impl CsTendons {
+    /// The inverse solver, built with `settings` (defaults when `None`) from a copy
+    /// of the readings model when there is none yet; else its settings replaced
+    /// (when given), keeping its warm state.
+    fn ik(&mut self, settings: Option<IkSettings>) -> Result<&mut IkWorkspace, (CsCode, String)> {
+        match &mut self.ik {
+            Some(ik) => {
+                if let Some(s) = settings {
+                    ik.set_settings(s).map_err(|e| bad(e.to_string()))?;
+                }
+            }
+            None => {
+                let ik = IkWorkspace::new(
+                    self.ws.clone(),
+                    self.limits.clone(),
+                    settings.unwrap_or_default(),
+                )
+                .map_err(|e| (CsCode::BadScene, e.to_string()))?;
+                self.ik = Some(Box::new(ik));
+            }
+        }
+        self.ik
+            .as_deref_mut()
+            .ok_or_else(|| bad("the inverse solver could not be built"))
+    }
 }
 
 /// Names as C strings (a name with a NUL byte cannot be one: a scene error).
@@ -711,9 +864,14 @@ pub unsafe extern "C" fn cs_tendons_new(
                 "robot.cables: no displacement-driven tendon (actuation = \"displacement\")".into(),
             ));
         }
+        let limits = scene
+            .actuator_limits()
+            .map_err(|e| (CsCode::BadScene, e.to_string()))?;
         let h = CsTendons {
             columns: c_names(ws.columns())?,
             readings: vec![0.0; ws.driven().len()],
+            limits,
+            ik: None,
             ws,
         };
         // SAFETY: checked non-null.
@@ -986,6 +1144,230 @@ pub unsafe extern "C" fn cs_tendons_section_poses(
         for (i, s) in sol.section_tips.iter().enumerate() {
             p[3 * i..3 * i + 3].copy_from_slice(s.position.as_slice());
             r[9 * i..9 * i + 9].copy_from_slice(s.rotation.as_slice());
+        }
+        Ok(())
+    })
+}
+
+/// The default inverse-solve settings into `*out`.
+///
+/// # Safety
+/// `out` is writable.
+#[no_mangle]
+pub unsafe extern "C" fn cs_ik_settings_default(out: *mut CsIkSettings) -> CsCode {
+    guard(|| {
+        // SAFETY: null or writable.
+        let out = unsafe { out.as_mut() }.ok_or_else(|| bad("out is null"))?;
+        *out = CsIkSettings::from(&IkSettings::default());
+        Ok(())
+    })
+}
+
+/// Actuator limits of the driven tendons (the scene's `[robot.limits]`, m):
+/// `min[n]`, `max[n]`, `n` = [`cs_tendons_count`]; `-inf`/`inf` where the scene sets
+/// none. No allocation.
+///
+/// # Safety
+/// `t` is a live handle; `min` and `max` hold `n` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_limits(
+    t: *const CsTendons,
+    min: *mut f64,
+    max: *mut f64,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_ref() }.ok_or_else(|| bad("tendons is null"))?;
+        let p = h.readings.len();
+        if n != p {
+            return Err(bad(format!("n = {n} for {p} displacement-driven tendons")));
+        }
+        // SAFETY: n doubles each per the contract.
+        unsafe {
+            out_slice(min, n)?.copy_from_slice(&h.limits.min_m);
+            out_slice(max, n)?.copy_from_slice(&h.limits.max_m);
+        }
+        Ok(())
+    })
+}
+
+/// Set up the inverse solver of [`cs_tendons_ik`] with `settings` (null: the
+/// defaults). The first call builds it (allocates; a copy of the handle's readings
+/// model, with its budget of [`cs_tendons_set_budget`] at that time, solved at zero
+/// readings); a later one replaces the settings and keeps its warm state. A bad
+/// value is `CS_CODE_BAD_ARGUMENT` naming the field (`ik.tolerance_m ...`) and
+/// changes nothing.
+///
+/// # Safety
+/// `t` is a live handle; `settings` is null or readable.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_ik_configure(
+    t: *mut CsTendons,
+    settings: *const CsIkSettings,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
+        // SAFETY: null or readable.
+        let s = match unsafe { settings.as_ref() } {
+            Some(s) => s.to_settings()?,
+            None => IkSettings::default(),
+        };
+        h.ik(Some(s))?;
+        Ok(())
+    })
+}
+
+/// Move the start of the next [`cs_tendons_ik`] to `readings[n]` (m, inside the
+/// limits): one forward solve (building the inverse solver with the defaults if
+/// there is none yet). A reading outside the limits or not finite is
+/// `CS_CODE_BAD_ARGUMENT` naming it (`readings[0] (servo_4_mm) ...`).
+///
+/// # Safety
+/// `t` is a live handle; `readings` holds `n` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_ik_start(
+    t: *mut CsTendons,
+    readings: *const f64,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
+        let p = h.readings.len();
+        if n != p {
+            return Err(bad(format!(
+                "n = {n} readings for {p} displacement-driven tendons"
+            )));
+        }
+        if readings.is_null() {
+            return Err(bad("readings is null"));
+        }
+        // SAFETY: n doubles per the contract.
+        let q = unsafe { std::slice::from_raw_parts(readings, n) };
+        h.ik(None)?.set_readings(q).map_err(|e| bad(e.to_string()))
+    })
+}
+
+/// Tensions `tensions[n]` (N) and, unless null, taut flags `taut[n]` (1 taut, 0
+/// slack) of the driven tendons at the readings of the last [`cs_tendons_ik`] (or
+/// [`cs_tendons_ik_start`]), `n` = [`cs_tendons_count`]: e.g. to check the
+/// least-tension objective's choice. `CS_CODE_BAD_ARGUMENT` before the inverse
+/// solver exists. No allocation.
+///
+/// # Safety
+/// `t` is a live handle; `tensions` (and `taut` unless null) hold `n` elements.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_ik_tensions(
+    t: *const CsTendons,
+    tensions: *mut f64,
+    taut: *mut i32,
+    n: usize,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_ref() }.ok_or_else(|| bad("tendons is null"))?;
+        let p = h.readings.len();
+        if n != p {
+            return Err(bad(format!("n = {n} for {p} displacement-driven tendons")));
+        }
+        let ik = h.ik.as_deref().ok_or_else(|| {
+            bad("no inverse solve yet: call cs_tendons_ik (or cs_tendons_ik_configure) first")
+        })?;
+        let ws = ik.tendon_workspace();
+        // SAFETY: n doubles per the contract.
+        unsafe { out_slice(tensions, n)? }.copy_from_slice(ws.tensions());
+        if !taut.is_null() {
+            // SAFETY: n ints per the contract (checked non-null).
+            let flags = unsafe { std::slice::from_raw_parts_mut(taut, n) };
+            for (f, &k) in flags.iter_mut().zip(ws.taut()) {
+                *f = i32::from(k);
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Inverse kinematics: the readings `readings[n]` (m, one per driven tendon, `n` =
+/// [`cs_tendons_count`]) that put the tip at `target[3]` (m, base frame), and its
+/// axis along `direction[3]` (any non-zero length; null: position only), inside the
+/// scene's `[robot.limits]`, warm from the previous call (or from
+/// [`cs_tendons_ik_start`]; the first call starts at zero readings). The outcome is
+/// in `*info` (may be null): a target outside the workspace is status 1
+/// (unreachable) with the closest tip found, not an error. A NaN or infinite
+/// target or direction, a zero-length direction or a wrong `n` is
+/// `CS_CODE_BAD_ARGUMENT` with a message naming it (`target.position_m[2] ...`,
+/// `target.direction ...`) and changes nothing. The first call builds the inverse
+/// solver with the defaults unless [`cs_tendons_ik_configure`] did (allocates);
+/// after it the call allocates nothing of its own (the library's bounded
+/// least-squares step, clarabel, allocates once per step until the library removes
+/// that: `capi/tests/alloc.rs`). The handle's readings solves
+/// ([`cs_tendons_solve`], [`cs_tendons_tip_position`], ...) are not affected: the
+/// inverse solver keeps its own state; `info->tip_m` is the tip at the returned
+/// readings.
+///
+/// # Safety
+/// `t` is a live handle; `target` holds 3 doubles; `direction` is null or holds 3
+/// doubles; `readings` holds `n` writable doubles; `info` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cs_tendons_ik(
+    t: *mut CsTendons,
+    target: *const f64,
+    direction: *const f64,
+    readings: *mut f64,
+    n: usize,
+    info: *mut CsIkInfo,
+) -> CsCode {
+    guard(|| {
+        // SAFETY: live handle or null.
+        let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
+        let p = h.readings.len();
+        if n != p {
+            return Err(bad(format!(
+                "n = {n} readings for {p} displacement-driven tendons"
+            )));
+        }
+        if target.is_null() {
+            return Err(bad("target is null"));
+        }
+        // SAFETY: 3 doubles each per the contract (direction checked non-null).
+        let position_m =
+            Vector3::from_column_slice(unsafe { std::slice::from_raw_parts(target, 3) });
+        let direction = (!direction.is_null()).then(|| {
+            // SAFETY: 3 doubles per the contract.
+            Vector3::from_column_slice(unsafe { std::slice::from_raw_parts(direction, 3) })
+        });
+        // SAFETY: n writable doubles per the contract.
+        let out = unsafe { out_slice(readings, n)? };
+        let target = IkTarget {
+            position_m,
+            direction,
+        };
+        target.validate().map_err(|e| bad(e.to_string()))?;
+        let ik = h.ik(None)?;
+        let r = ik.solve(&target).map_err(|e| bad(e.to_string()))?;
+        out.copy_from_slice(ik.readings());
+        // SAFETY: null or writable.
+        if let Some(info) = unsafe { info.as_mut() } {
+            let count = |v: usize| v.min(u32::MAX as usize) as u32;
+            *info = CsIkInfo {
+                status: match r.status {
+                    IkStatus::Reached => 0,
+                    IkStatus::Unreachable { .. } => 1,
+                    IkStatus::BudgetExhausted => 2,
+                },
+                objective: objective_code(r.objective),
+                iterations: count(r.iterations),
+                jacobians: count(r.jacobians),
+                forward_solves: count(r.forward_solves),
+                qp_solves: count(r.qp_solves),
+                slack: count(r.slack),
+                tip_m: [r.tip_m.x, r.tip_m.y, r.tip_m.z],
+                distance_m: r.distance_m,
+                angle_rad: r.angle_rad,
+                first_order: r.first_order,
+            };
         }
         Ok(())
     })

@@ -243,3 +243,71 @@ fn tendon_readers_do_not_allocate_and_the_solve_adds_none() {
         cs_tendons_free(t);
     }
 }
+
+/// `cs_tendons_ik` (and the `cs_tendons_ik_tensions` reader after it) on the
+/// calibrated FTDCR v4, targets = the model's tips at consecutive val rows (as the
+/// library's `tests/ik_alloc.rs`): after 10 warm-up calls, 40 warm calls allocate
+/// exactly what the library's `IkWorkspace::solve`
+/// allocates for the same targets (the C layer adds none), and at most the
+/// library test's ceiling: clarabel's `solve` allocates once per QP today (at most
+/// 8 per QP there) plus 10. Once the library's warm tick allocates nothing, the
+/// bound below becomes `assert_eq!(abi, 0, ...)`.
+#[test]
+fn ik_warm_calls_allocate_no_more_than_the_library() {
+    use cablesense::command::{IkSettings, IkTarget, IkWorkspace};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let path = root.join("data/calibration/ftdcr_v4_calibrated.toml");
+    let sc = cablesense::Scene::load(&path).unwrap();
+    let val = std::fs::read_to_string(root.join("data/hardware/ftdcr_v4/val.csv")).unwrap();
+    let targets = sc.model_tips(&val, 50).unwrap();
+    let mut lib = IkWorkspace::from_scene(&sc, IkSettings::default()).unwrap();
+    let text = scene("data/calibration/ftdcr_v4_calibrated.toml");
+    let mut t = std::ptr::null_mut();
+    let (mut q, mut info) = ([0.0; 9], CsIkInfo::default());
+    let (mut tension, mut taut) = ([0.0; 9], [0i32; 9]);
+    let (mut abi, mut library, mut qps) = (0, 0, 0);
+    // SAFETY: valid string and out pointer; the handle lives until the free below;
+    // buffers of the stated sizes.
+    unsafe {
+        assert_eq!(cs_tendons_new(text.as_ptr(), &mut t), CsCode::Ok);
+        assert_eq!(cs_tendons_ik_configure(t, std::ptr::null()), CsCode::Ok);
+        for (i, target) in targets.iter().enumerate() {
+            let x = [target.x, target.y, target.z];
+            let before = allocs();
+            let code = cs_tendons_ik(
+                t,
+                x.as_ptr(),
+                std::ptr::null(),
+                q.as_mut_ptr(),
+                9,
+                &mut info,
+            );
+            assert_eq!(code, CsCode::Ok, "{}", last_error());
+            let code = cs_tendons_ik_tensions(t, tension.as_mut_ptr(), taut.as_mut_ptr(), 9);
+            let n_abi = allocs() - before;
+            assert_eq!(code, CsCode::Ok, "{}", last_error());
+            let goal = IkTarget::position(*target);
+            let before = allocs();
+            let r = lib.solve(&goal).unwrap();
+            let n_lib = allocs() - before;
+            assert_eq!(r.qp_solves, info.qp_solves as usize, "call {i}");
+            if i >= 10 {
+                assert_eq!(
+                    n_abi, n_lib,
+                    "call {i}: the C layer allocates {n_abi} vs {n_lib}"
+                );
+                abi += n_abi;
+                library += n_lib;
+                qps += r.qp_solves;
+            }
+        }
+        cs_tendons_free(t);
+    }
+    eprintln!(
+        "40 warm cs_tendons_ik calls: {abi} allocations (library {library}), {qps} QP solves"
+    );
+    assert!(
+        abi <= qps * 8 + 10,
+        "{abi} allocations in 40 warm calls with {qps} QPs"
+    );
+}

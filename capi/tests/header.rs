@@ -81,6 +81,8 @@ fn header_declares_every_exported_function() {
         "CsSolveInfo",
         "CsEstimateInfo",
         "CsTendonInfo",
+        "CsIkSettings",
+        "CsIkInfo",
         "CsModel",
         "CsEstimator",
         "CsTendons",

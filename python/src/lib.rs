@@ -1,10 +1,12 @@
 //! Python module `cablesense` (extension `cablesense._cablesense`): scenes, forward
 //! solves with numpy arrays, a warm-started solver, the estimator, solves from tendon
-//! readings (`tendons.rs`), calibration from a recording (`calibrate.rs`) and the
+//! readings (`tendons.rs`), inverse kinematics and the reachable workspace
+//! (`command.rs`), calibration from a recording (`calibrate.rs`) and the
 //! thesis validation (`validation.rs`). Only
 //! translates types and errors; the GIL is released inside every solve and tick.
 
 mod calibrate;
+mod command;
 mod tendons;
 mod validation;
 
@@ -33,8 +35,17 @@ create_exception!(
      `field` names the reading (e.g. `readings[1] (s1b)`), `line` the file line (or None)."
 );
 
+create_exception!(
+    cablesense,
+    TargetError,
+    PyValueError,
+    "An inverse-kinematics target is bad (a NaN or infinite coordinate, a direction of \
+     zero length, a wrong shape); `field` names it (e.g. `target[2]`, `direction`, \
+     `targets`)."
+);
+
 /// The field path of a model error.
-fn field_of(e: &ModelError) -> Option<String> {
+pub(crate) fn field_of(e: &ModelError) -> Option<String> {
     match e {
         ModelError::NonFinite { field, .. }
         | ModelError::NonPositive { field, .. }
@@ -739,6 +750,8 @@ fn _cablesense(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Solver>()?;
     m.add_class::<PyEstimator>()?;
     m.add_class::<tendons::TendonSolver>()?;
+    m.add_class::<command::IkSolver>()?;
+    m.add_function(wrap_pyfunction!(command::workspace, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(demo_files, m)?)?;
     m.add_function(wrap_pyfunction!(demo_text, m)?)?;
@@ -747,6 +760,7 @@ fn _cablesense(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calibrate::predict_recording, m)?)?;
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     m.add("ReadingsError", m.py().get_type::<ReadingsError>())?;
+    m.add("TargetError", m.py().get_type::<TargetError>())?;
     m.add(
         "CalibrationError",
         m.py().get_type::<calibrate::CalibrationError>(),

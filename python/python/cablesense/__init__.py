@@ -14,6 +14,16 @@ Tendon-driven robots (displacement-driven tendons, servo readings in metres):
     for i, line in enumerate(open("readings.csv"), 1):   # a recording, row by row
         out = ts.solve_line(i, line)       # None for the header
 
+Commanding the robot: which readings put the tip at a target (inverse kinematics
+within the scene's [robot.limits]), and the reachable workspace:
+
+    ik = cablesense.IkSolver(scene, objective="closest")
+    readings, result = ik.ik([0.01, 0.0, 0.09])   # warm from the previous call
+    result["status"], result["distance_m"]        # reached / unreachable / budget_exhausted
+    batch = ik.ik_many(targets)                   # (n, 3) in, (n, p) readings out
+    ws = cablesense.workspace(scene, samples=2000)
+    ws["tips"], ws["hull_volume_m3"]
+
 Calibration from a recording (the scene's [calibration] table maps the columns):
 
     fit = cablesense.calibrate(scene, "train.csv", val="val.csv")
@@ -37,27 +47,33 @@ The thesis validation (data embedded in the library):
 
 Invalid scenes raise SceneError (a ValueError) whose `field` names the offending
 field path, e.g. "robot.sections[0].length_m"; bad readings raise ReadingsError
-(`field` e.g. "readings[1] (s1b)", `line`); a calibration that cannot run raises
+(`field` e.g. "readings[1] (s1b)", `line`); bad IK targets raise TargetError
+(`field` e.g. "target[2]", "direction"); a calibration that cannot run raises
 CalibrationError (`file`, `line`, `column`, `field`).
 """
 
 from ._cablesense import (
     CalibrationError,
     Estimator,
+    IkSolver,
     ReadingsError,
     Scene,
     SceneError,
     Solver,
+    TargetError,
     TendonSolver,
     calibrate,
     predict_recording,
     solve,
     validate_thesis,
+    workspace,
     __version__,
 )
 from ._types import (
     CalibrationReport,
     Estimate,
+    IkBatch,
+    IkResult,
     RecordingPrediction,
     Solution,
     SolveReport,
@@ -68,6 +84,7 @@ from ._types import (
     TendonSolution,
     ThesisComparison,
     Tick,
+    WorkspaceCloud,
 )
 from . import demo
 
@@ -75,6 +92,8 @@ __all__ = [
     "CalibrationError",
     "CalibrationReport",
     "Estimate",
+    "IkBatch",
+    "IkResult",
     "RecordingPrediction",
     "Solution",
     "SolveReport",
@@ -85,16 +104,20 @@ __all__ = [
     "TendonSolution",
     "ThesisComparison",
     "Tick",
+    "WorkspaceCloud",
     "demo",
     "Estimator",
+    "IkSolver",
     "ReadingsError",
     "Scene",
     "SceneError",
     "Solver",
+    "TargetError",
     "TendonSolver",
     "calibrate",
     "predict_recording",
     "solve",
     "validate_thesis",
+    "workspace",
     "__version__",
 ]

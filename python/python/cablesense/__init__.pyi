@@ -1,7 +1,19 @@
 """Type stubs of the cablesense extension (see __init__.py for the overview)."""
 
 from os import PathLike
-from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, final, overload
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    List,
+    Literal,
+    Optional,
+    Sequence,
+    Tuple,
+    Union,
+    final,
+    overload,
+)
 
 import numpy as np
 import numpy.typing as npt
@@ -10,6 +22,8 @@ from typing_extensions import Self
 from . import demo as demo
 from ._types import CalibrationReport as CalibrationReport
 from ._types import Estimate as Estimate
+from ._types import IkBatch as IkBatch
+from ._types import IkResult as IkResult
 from ._types import RecordingPrediction as RecordingPrediction
 from ._types import Solution as Solution
 from ._types import SolveReport as SolveReport
@@ -20,6 +34,7 @@ from ._types import TendonRow as TendonRow
 from ._types import TendonSolution as TendonSolution
 from ._types import ThesisComparison as ThesisComparison
 from ._types import Tick as Tick
+from ._types import WorkspaceCloud as WorkspaceCloud
 
 __version__: str
 
@@ -27,6 +42,8 @@ __all__ = [
     "CalibrationError",
     "CalibrationReport",
     "Estimate",
+    "IkBatch",
+    "IkResult",
     "RecordingPrediction",
     "Solution",
     "SolveReport",
@@ -37,17 +54,21 @@ __all__ = [
     "TendonSolution",
     "ThesisComparison",
     "Tick",
+    "WorkspaceCloud",
     "demo",
     "Estimator",
+    "IkSolver",
     "ReadingsError",
     "Scene",
     "SceneError",
     "Solver",
+    "TargetError",
     "TendonSolver",
     "calibrate",
     "predict_recording",
     "solve",
     "validate_thesis",
+    "workspace",
     "__version__",
 ]
 
@@ -71,6 +92,13 @@ class ReadingsError(ValueError):
     """The reading, e.g. ``readings[1] (s1b)`` or ``rows[4].readings[0] (s1a)``."""
     line: Optional[int]
     """Line of a readings file (``TendonSolver.solve_line``), else None."""
+
+class TargetError(ValueError):
+    """A bad inverse-kinematics target: a NaN or infinite coordinate, a direction of
+    zero length, a wrong shape."""
+
+    field: Optional[str]
+    """The argument, e.g. ``target[2]``, ``direction``, ``targets``."""
 
 class CalibrationError(ValueError):
     """A calibration could not run (bad recording, parameter path, unsolvable model)."""
@@ -197,6 +225,83 @@ class TendonSolver:
         header, comment or blank line."""
     def solution(self) -> TendonSolution:
         """Full solution of the last solve, with the row's report."""
+
+#: The secondary objective that chooses among the solutions of an inverse solve.
+_Objective = Literal["closest", "least_pull", "least_tension"]
+
+@final
+class IkSolver:
+    """Inverse kinematics: which readings put the tip at a target, inside the
+    scene's ``[robot.limits]``.
+
+    Every call starts warm from the readings of the previous one (or of
+    ``set_readings``); the first from zero readings. The GIL is released inside
+    every solve. Bad settings raise ``SceneError`` naming the field
+    (``ik.tolerance_m``).
+    """
+
+    def __new__(
+        cls,
+        scene: Scene,
+        objective: _Objective = "closest",
+        secondary_weight: Optional[float] = None,
+        tolerance_m: Optional[float] = None,
+        angle_tolerance_rad: Optional[float] = None,
+        direction_weight_m: Optional[float] = None,
+        trust_radius_m: Optional[float] = None,
+        max_iterations: Optional[int] = None,
+        max_forward_solves: Optional[int] = None,
+    ) -> Self: ...
+    @property
+    def columns(self) -> List[str]:
+        """Readings column of each driven tendon (the order of the readings)."""
+    @property
+    def scale_m(self) -> float:
+        """Metres per unit of a readings file's tendon columns (readings here are m)."""
+    @property
+    def limits(self) -> npt.NDArray[np.float64]:
+        """Actuator limits (p, 2), ``[min, max]`` per reading (m; -inf/inf: none)."""
+    @property
+    def readings(self) -> npt.NDArray[np.float64]:
+        """The readings the next ``ik`` starts from (m)."""
+    @property
+    def tip(self) -> npt.NDArray[np.float64]:
+        """The tip at ``readings`` (m)."""
+    @property
+    def settings(self) -> Dict[str, Any]:
+        """The constructor's settings."""
+    def set_readings(self, readings: _Floats) -> None:
+        """Start the next ``ik`` at these readings (m, inside the limits; one
+        forward solve). Bad readings raise ``ReadingsError`` naming them."""
+    def ik(
+        self,
+        target: _Floats,
+        direction: Optional[_Floats] = None,
+        *,
+        objective: Optional[_Objective] = None,
+        secondary_weight: Optional[float] = None,
+        direction_weight_m: Optional[float] = None,
+        tolerance_m: Optional[float] = None,
+    ) -> Tuple[npt.NDArray[np.float64], IkResult]:
+        """Readings (p,) m that put the tip at ``target`` (3,) m (and its axis along
+        ``direction``), warm from the previous call, and the result. An unreachable
+        target is ``status == "unreachable"`` with the closest tip, not an
+        exception; a NaN target or a zero-length direction raises ``TargetError``."""
+    def ik_many(self, targets: _Rows, directions: Optional[_Rows] = None) -> IkBatch:
+        """``ik`` for every row of ``targets`` (n, 3) in order, chained warm; a bad
+        row is status ``invalid`` and does not stop the batch."""
+
+def workspace(
+    scene: Scene,
+    samples: int = 20000,
+    threads: int = 0,
+    progress: Optional[Callable[[int], object]] = None,
+    marker_offset: Optional[_Floats] = None,
+) -> WorkspaceCloud:
+    """The reachable tips of the actuator box of ``[robot.limits]`` (``samples``
+    Halton points, warm chains, ``threads`` threads, 0: every core) and their convex
+    hull. ``progress(done)`` is called after each sample; with ``marker_offset`` (m,
+    tip frame) also the ``markers`` of every sample."""
 
 def calibrate(
     scene: Scene,

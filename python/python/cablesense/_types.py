@@ -150,6 +150,82 @@ class Tick(TypedDict):
     tip: FloatArray
 
 
+class IkResult(TypedDict):
+    """``IkSolver.ik``'s result (the readings come beside it): ``status``:
+    ``reached``, ``unreachable`` (the closest tip found, at a constrained stationary
+    point), ``budget_exhausted``; ``distance_m`` from ``tip`` (3,) to the target;
+    ``angle_rad`` to the target direction (0 without one); ``objective`` the
+    secondary objective that chose the solution (``closest``, ``least_pull``,
+    ``least_tension``); the work: ``iterations``, ``jacobians`` (evaluated),
+    ``forward_solves``, ``qp_solves``; ``slack`` tendons; ``first_order`` (0 at a
+    constrained stationary point, NaN when none was built); ``tensions`` (p,) N and
+    ``taut`` (p,) at the readings."""
+
+    status: str
+    reached: bool
+    distance_m: float
+    tip: FloatArray
+    angle_rad: float
+    objective: str
+    iterations: int
+    jacobians: int
+    forward_solves: int
+    qp_solves: int
+    slack: int
+    first_order: float
+    tensions: FloatArray
+    taut: BoolArray
+
+
+class IkBatch(TypedDict):
+    """``IkSolver.ik_many``: ``readings`` (n, p) m; ``tip`` (n, 3); ``distance_m``,
+    ``angle_rad`` (n,); ``status`` [n] (as ``IkResult``, or ``invalid`` for a bad
+    row, whose numbers are NaN); ``status_code`` (n,) int8 (0 reached, 1
+    unreachable, 2 budget_exhausted, -1 invalid); ``reached`` (n,); ``iterations``,
+    ``forward_solves`` (n,); ``objective``; ``errors`` [n] (why a row was invalid,
+    None for a good one)."""
+
+    readings: FloatArray
+    tip: FloatArray
+    distance_m: FloatArray
+    angle_rad: FloatArray
+    status: List[str]
+    status_code: npt.NDArray[np.int8]
+    reached: BoolArray
+    iterations: npt.NDArray[np.uint64]
+    forward_solves: npt.NDArray[np.uint64]
+    objective: str
+    errors: List[Optional[str]]
+
+
+class WorkspaceCloud(TypedDict):
+    """``workspace``: the sampled actuator box and its tips. ``columns`` [p];
+    ``limits`` (p, 2) m; ``readings`` (n, p) m; ``tips`` (n, 3) m (NaN for a sample
+    that did not solve); ``markers`` (n, 3) m, the ``marker_offset`` point of each
+    sample (None without one); ``status`` (n,) uint8, an index into ``status_names``
+    (converged, converged_stepped, converged_cold, failed); ``solved`` (n,);
+    ``solved_count``, ``failed_count``; ``sampling_s``; ``hull_volume_m3`` of the
+    convex hull of the solved tips (None when it has no volume: ``hull_error``
+    says why); ``hull_vertices`` (v, 3) m; ``hull_triangles`` (t, 3) indices into
+    them, counter-clockwise seen from outside."""
+
+    columns: List[str]
+    limits: FloatArray
+    readings: FloatArray
+    tips: FloatArray
+    markers: Optional[FloatArray]
+    status: npt.NDArray[np.uint8]
+    status_names: List[str]
+    solved: BoolArray
+    solved_count: int
+    failed_count: int
+    sampling_s: float
+    hull_volume_m3: Optional[float]
+    hull_vertices: FloatArray
+    hull_triangles: npt.NDArray[np.uint64]
+    hull_error: Optional[str]
+
+
 #: Calibration report (the layout of ``cablesense calibrate``'s report.json) plus
 #: ``scene``, the calibrated Scene.
 CalibrationReport = Dict[str, Any]
@@ -161,6 +237,8 @@ RecordingPrediction = Dict[str, Any]
 __all__ = [
     "CalibrationReport",
     "Estimate",
+    "IkBatch",
+    "IkResult",
     "RecordingPrediction",
     "Solution",
     "SolveReport",
@@ -171,4 +249,5 @@ __all__ = [
     "TendonSolution",
     "ThesisComparison",
     "Tick",
+    "WorkspaceCloud",
 ]
