@@ -155,7 +155,7 @@ impl ReadingsModel {
             }
         };
         let solve_steps: Vec<f64> = steps.iter().map(|h| h * SOLVE_STEP_FACTOR).collect();
-        if self.ws.workspace().robot().friction_mu() > 0.0 {
+        if !self.ws.workspace().robot().friction().is_frictionless() {
             finite_differences(self, values, &solve_steps, rows, out)?;
             count_all(done, rows.len());
             return Ok(());

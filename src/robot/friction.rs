@@ -9,6 +9,7 @@
 //! (reading falling), it rises, `exp(+mu theta)`. The termination disk holds the
 //! knot: no wrap there.
 
+use super::tendon::FrictionSpec;
 use nalgebra::Vector3;
 
 /// Angle (rad) between two directions, robust near 0 and pi.
@@ -43,6 +44,106 @@ pub fn capstan_factors(
         out[k] = factor;
         dir_in = dir_out;
         prev = *p;
+    }
+}
+
+/// The friction law of the tendons on their disks, resolved once from the scene's
+/// `[robot.friction]` table ([`FrictionSpec`]). The solvers ask the law, never the
+/// numbers: whether there is friction ([`FrictionLaw::is_frictionless`]), how a
+/// tendon's sliding direction follows its readings ([`FrictionLaw::next_direction`])
+/// and what the chords' tension factors are ([`FrictionLaw::chord_factors`]). A new
+/// law is a variant here and its fields in the scene table (`robot/tendon.rs`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FrictionLaw {
+    /// No `[robot.friction]` table, or `mu = 0`.
+    Frictionless,
+    /// Capstan friction per hole (module docs) with a sliding direction that
+    /// switches at once when a reading moves by more than `deadband_m` (m).
+    CapstanSwitching {
+        /// Coefficient of friction (dimensionless, > 0).
+        mu: f64,
+        /// Reading change (m) below which the direction is kept.
+        deadband_m: f64,
+    },
+    /// Capstan friction per hole with a first-order (Dahl-type) pre-sliding
+    /// turn-round over the slide length `slide_m` (m): continuous in the readings
+    /// ([`FrictionSpec::slide_m`]).
+    CapstanPreSliding {
+        /// Coefficient of friction (dimensionless, > 0).
+        mu: f64,
+        /// Slide length (m, > 0).
+        slide_m: f64,
+    },
+}
+
+impl FrictionLaw {
+    /// The law of a robot's `[robot.friction]` table (absent or `mu = 0`:
+    /// frictionless).
+    pub fn of(spec: Option<&FrictionSpec>) -> Self {
+        match spec {
+            Some(f) if f.mu > 0.0 => match f.slide_m {
+                Some(slide_m) => Self::CapstanPreSliding { mu: f.mu, slide_m },
+                None => Self::CapstanSwitching {
+                    mu: f.mu,
+                    deadband_m: f.deadband_m,
+                },
+            },
+            _ => Self::Frictionless,
+        }
+    }
+
+    /// No friction: the tendon tension is the same along the whole tendon.
+    #[inline]
+    pub fn is_frictionless(&self) -> bool {
+        matches!(self, Self::Frictionless)
+    }
+
+    /// The coefficient of friction (0 when frictionless).
+    pub fn mu(&self) -> f64 {
+        match *self {
+            Self::Frictionless => 0.0,
+            Self::CapstanSwitching { mu, .. } | Self::CapstanPreSliding { mu, .. } => mu,
+        }
+    }
+
+    /// The direction state after a reading change `dq` (m) from state `s` (in
+    /// `[-1, 1]`, -1 pulled in, +1 paid out): the switching law (-1 or +1 once `|dq|`
+    /// exceeds the deadband, else unchanged) or the pre-sliding law (towards
+    /// `-sign(dq)` by the factor `1 - exp(-|dq| / slide_m)`). Returns the new state
+    /// and whether the reading counts as a move (the switching law keeps its last
+    /// reading below the deadband, so slow creeps still add up); frictionless, the
+    /// state is kept and every reading counts.
+    pub fn next_direction(&self, s: f64, dq: f64) -> (f64, bool) {
+        match *self {
+            Self::Frictionless => (s, true),
+            Self::CapstanPreSliding { slide_m, .. } => {
+                if dq == 0.0 {
+                    return (s, true);
+                }
+                let target = if dq > 0.0 { -1.0 } else { 1.0 };
+                (target + (s - target) * (-dq.abs() / slide_m).exp(), true)
+            }
+            Self::CapstanSwitching { deadband_m, .. } => {
+                if dq.abs() > deadband_m {
+                    (if dq > 0.0 { -1.0 } else { 1.0 }, true)
+                } else {
+                    (s, false)
+                }
+            }
+        }
+    }
+
+    /// Relative tension of each chord of a tendon in direction state `sign`
+    /// ([`capstan_factors`]; all 1 when frictionless).
+    pub fn chord_factors(
+        &self,
+        sign: f64,
+        axis: &Vector3<f64>,
+        base: &Vector3<f64>,
+        holes: &[Vector3<f64>],
+        out: &mut [f64],
+    ) {
+        capstan_factors(self.mu(), sign, axis, base, holes, out);
     }
 }
 

@@ -13,7 +13,7 @@ mod routing;
 mod spec;
 mod tendon;
 
-pub use friction::capstan_factors;
+pub use friction::{capstan_factors, FrictionLaw};
 pub use limits::{ActuatorLimits, LimitsSpec};
 pub use routing::{PathPoint, PathSpec, RoutingField, TendonPath};
 pub use spec::{
@@ -259,8 +259,9 @@ impl Robot {
         // capstan friction: `robot::friction` is a per-hole wrap angle, and a tendon
         // sliding along a continuous sheath has friction distributed along its path
         // (tension varying with `s`, which the RW 2011 equations here do not model).
-        let mu = spec.friction.as_ref().map_or(0.0, |f| f.mu);
-        if c.actuation == Actuation::Displacement && mu > 0.0 {
+        let law = FrictionLaw::of(spec.friction.as_ref());
+        if c.actuation == Actuation::Displacement && !law.is_frictionless() {
+            let mu = law.mu();
             return Err(ModelError::Invalid {
                 field: "robot.friction".into(),
                 why: format!(
@@ -373,9 +374,15 @@ impl Robot {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Capstan friction coefficient (0 when the robot has no `friction` table).
+    /// The tendons' friction law (`[robot.friction]`; frictionless when absent).
+    pub fn friction(&self) -> FrictionLaw {
+        FrictionLaw::of(self.spec.friction.as_ref())
+    }
+
+    /// Capstan friction coefficient (0 when frictionless): [`Robot::friction`]'s
+    /// [`FrictionLaw::mu`].
     pub fn friction_mu(&self) -> f64 {
-        self.spec.friction.as_ref().map_or(0.0, |f| f.mu)
+        self.friction().mu()
     }
 
     /// The description this robot was built from.

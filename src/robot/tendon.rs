@@ -162,31 +162,6 @@ pub struct FrictionSpec {
 }
 
 impl FrictionSpec {
-    /// The direction state after a reading change `dq` (m) from state `s`: the
-    /// switching law (`slide_m` absent: -1 pulled in, +1 paid out once `|dq|`
-    /// exceeds the deadband, else unchanged) or the smooth pre-sliding law
-    /// ([`FrictionSpec::slide_m`]). Returns the new state and whether the reading
-    /// counts as a move (the switching law keeps its last reading below the
-    /// deadband, so slow creeps still add up).
-    pub fn next_direction(&self, s: f64, dq: f64) -> (f64, bool) {
-        match self.slide_m {
-            Some(slide) => {
-                if dq == 0.0 {
-                    return (s, true);
-                }
-                let target = if dq > 0.0 { -1.0 } else { 1.0 };
-                (target + (s - target) * (-dq.abs() / slide).exp(), true)
-            }
-            None => {
-                if dq.abs() > self.deadband_m {
-                    (if dq > 0.0 { -1.0 } else { 1.0 }, true)
-                } else {
-                    (s, false)
-                }
-            }
-        }
-    }
-
     /// Check the numbers.
     pub fn validate(&self) -> Result<(), ModelError> {
         ModelError::non_negative("robot.friction.mu", self.mu)?;
@@ -209,6 +184,7 @@ fn default_deadband() -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::friction::FrictionLaw;
     use super::*;
 
     fn law(slide_m: Option<f64>) -> FrictionSpec {
@@ -219,9 +195,37 @@ mod tests {
         }
     }
 
+    /// No table or `mu = 0` is frictionless; a slide length picks the pre-sliding
+    /// law, else the switching one.
+    #[test]
+    fn the_table_resolves_to_its_law() {
+        assert!(FrictionLaw::of(None).is_frictionless());
+        let mut zero = law(Some(1e-4));
+        zero.mu = 0.0;
+        assert!(FrictionLaw::of(Some(&zero)).is_frictionless());
+        assert_eq!(
+            FrictionLaw::of(Some(&law(Some(1e-4)))),
+            FrictionLaw::CapstanPreSliding {
+                mu: 0.1,
+                slide_m: 1e-4
+            }
+        );
+        assert_eq!(
+            FrictionLaw::of(Some(&law(None))),
+            FrictionLaw::CapstanSwitching {
+                mu: 0.1,
+                deadband_m: 1e-5
+            }
+        );
+        assert_eq!(
+            FrictionLaw::Frictionless.next_direction(0.0, 1.0),
+            (0.0, true)
+        );
+    }
+
     #[test]
     fn the_switching_law_flips_beyond_the_deadband_only() {
-        let f = law(None);
+        let f = FrictionLaw::of(Some(&law(None)));
         assert_eq!(f.next_direction(0.0, 2e-5), (-1.0, true));
         assert_eq!(f.next_direction(-1.0, -2e-5), (1.0, true));
         // below the deadband: unchanged, and the reading is not taken as a move
@@ -231,7 +235,7 @@ mod tests {
     #[test]
     fn the_pre_sliding_law_turns_round_continuously() {
         let slide = 2e-4;
-        let f = law(Some(slide));
+        let f = FrictionLaw::of(Some(&law(Some(slide))));
         // pulled in from rest by one slide length: 1 - 1/e of the way to -1
         let (s, moved) = f.next_direction(0.0, slide);
         assert!(moved);

@@ -47,6 +47,6 @@ mod solve;
 // The tendon's description, mechanics and capstan friction belong to the robot
 // (`crate::robot`); re-exported here under their established paths.
 pub use crate::robot::{
-    capstan_factors, Actuation, FrictionSpec, RoutingSpec, TendonMechanics, TendonSpec,
+    capstan_factors, Actuation, FrictionLaw, FrictionSpec, RoutingSpec, TendonMechanics, TendonSpec,
 };
 pub use solve::{TendonReport, TendonSettings, TendonWorkspace};

@@ -30,7 +30,7 @@
 //! respect to the shape are not in the Jacobian (they are second order in `mu`
 //! times the change of wrap angle per step).
 
-use super::{capstan_factors, TendonMechanics};
+use super::{FrictionLaw, TendonMechanics};
 use crate::error::ModelError;
 use crate::math::DenseLu;
 pub use crate::settings::TendonSettings;
@@ -114,12 +114,11 @@ pub struct TendonWorkspace {
     lu: DenseLu,
     /// `sens` is from the current point (else from an earlier one: chord steps).
     sens_fresh: bool,
-    /// Friction: `mu`, the law (deadband or slide length), per-tendon direction
-    /// state (-1 pulled in, +1 paid out, 0 at rest, between while turning round
-    /// under the pre-sliding law), last readings, factor scratch and length-weighted
-    /// mean factor.
-    mu: f64,
-    friction: Option<crate::tendons::FrictionSpec>,
+    /// Friction: the law ([`FrictionLaw`]), per-tendon direction state (-1 pulled
+    /// in, +1 paid out, 0 at rest, between while turning round under the
+    /// pre-sliding law), last readings, factor scratch and length-weighted mean
+    /// factor.
+    friction: FrictionLaw,
     sign: Vec<f64>,
     last_q: Vec<f64>,
     factors: Vec<Vec<f64>>,
@@ -146,7 +145,7 @@ impl crate::math::warm::WarmCopy for TendonWorkspace {
             ws, free, t, t_trial, taut, taut_before, g, step, theta, sens, lengths, lu,
             sens_fresh, sign, last_q, factors, mean_factor, has_solution, report, joint,
         ], keep: [
-            driven, mech, columns, free0, geo, n_extra, mu, friction, x_ref, rollback, budget,
+            driven, mech, columns, free0, geo, n_extra, friction, x_ref, rollback, budget,
         ]);
     }
 }
@@ -312,17 +311,14 @@ impl TendonWorkspace {
         for (i, reading) in readings_m.iter().enumerate() {
             let q = reading - self.mech[i].zero_offset_m;
             self.free[i] = self.free0[i] - q;
-            // friction direction state: the way the tendon last moved (`FrictionSpec::next_direction`)
-            let dq = q - self.last_q[i];
-            match &self.friction {
-                Some(f) if self.mu > 0.0 => {
-                    let (s, moved) = f.next_direction(self.sign[i], dq);
-                    self.sign[i] = s;
-                    if moved {
-                        self.last_q[i] = q;
-                    }
-                }
-                _ => self.last_q[i] = q,
+            // friction direction state: the way the tendon last moved
+            // (`FrictionLaw::next_direction`; frictionless, it stays 0)
+            let (s, moved) = self
+                .friction
+                .next_direction(self.sign[i], q - self.last_q[i]);
+            self.sign[i] = s;
+            if moved {
+                self.last_q[i] = q;
             }
         }
         let start = if self.has_solution {
@@ -343,7 +339,7 @@ impl TendonWorkspace {
             shooting_solves: 0,
             slack: 0,
         };
-        // the warm fast path (mu = 0, or friction factors that stay put)
+        // the warm fast path (frictionless, or friction factors that stay put)
         self.joint.cold = start == Start::Cold;
         if start == Start::Warm && self.tendon_settings().joint_newton && self.solve_joint_settled()
         {
@@ -461,7 +457,7 @@ impl TendonWorkspace {
 
     /// Capstan factors from the current shape; `true` when they did not change.
     fn refresh_factors(&mut self) -> bool {
-        if self.mu == 0.0 {
+        if self.friction.is_frictionless() {
             return true;
         }
         let axis = self.ws.robot().base_rotation() * Vector3::z();
@@ -471,7 +467,8 @@ impl TendonWorkspace {
             let base = self.ws.base_hole_world(j);
             let holes = self.ws.cable_holes(j);
             let f = &mut self.factors[i];
-            capstan_factors(self.mu, self.sign[i], &axis, &base, holes, f);
+            self.friction
+                .chord_factors(self.sign[i], &axis, &base, holes, f);
             let old = self.ws.chord_factors(j);
             let changed = old.iter().zip(f.iter()).any(|(a, b)| (a - b).abs() > 1e-13);
             // length-weighted mean factor of the chords, for the stretch

@@ -88,8 +88,7 @@ impl TendonWorkspace {
         params.extend_from_slice(extra);
         let nc = robot.cables().len();
         let routes: Vec<usize> = robot.cables().iter().map(|c| c.route.len()).collect();
-        let mu = robot.friction_mu();
-        let friction = robot.spec().friction.clone();
+        let friction = robot.friction();
         let ws = Workspace::with_params(robot, loads, settings, &params)?;
         let p = driven.len();
         let np = params.len();
@@ -113,7 +112,6 @@ impl TendonWorkspace {
             lengths: vec![0.0; nc],
             lu: DenseLu::new(p),
             sens_fresh: false,
-            mu,
             friction,
             sign: vec![0.0; p],
             last_q: vec![0.0; p],
