@@ -19,10 +19,30 @@
 //! visited in greedy nearest-neighbour order (from the one nearest reading 0, each
 //! next the nearest not yet visited, Euclidean in the box scaled to the unit cube),
 //! so each readings solve starts warm from a near neighbour
-//! ([`TendonWorkspace::solve_readings`]); a warm solve that does not converge is
-//! tried once more cold (straight rod, pretensions). Chunks are solved in parallel
+//! ([`crate::tendons::TendonWorkspace::solve_readings`]). Chunks are solved in parallel
 //! (`std::thread::scope`, one clone of the workspace per chunk, so the result does
 //! not depend on the number of threads).
+//!
+//! **Bounded work per sample.** Each readings solve runs under a deterministic
+//! budget of rod passes ([`WorkspaceSettings::max_passes`],
+//! `numerics.tendons.max_passes`): the warm predictor and Newton step from the
+//! chain's last converged sample, and when they do not reach the sample, the joint
+//! path from the reference equilibrium at reading 0 with what is left; the nested
+//! fallback (a full shooting solve per tension iterate) is not run. Measured on the
+//! calibrated FTDCR v4 (docs/command.md): a converged sample takes about 23 passes,
+//! a failing one stalls after about 80 on its own, where the unbudgeted solve with
+//! its nested fallback spent about 1100 passes and 0.4 s on it. The samples that
+//! fail are counted ([`SampleStatus::Failed`]), never dropped. What fails: on FTDCR
+//! v4, samples that pull all three tendons of one section at once (the distal one
+//! mostly); continuing to such a sample from reading 0 along a straight line, with
+//! steps of 1/40 and then 1/1600 of the way, stalls at the same reading with every
+//! tendon of that section taut at 5 to 13 N (a turning point of the equilibrium
+//! along the path), and paths that move one section at a time or the pay-outs first
+//! stall too. Optional, off by default (they found few more samples at many times
+//! the cost): a continuation from the last converged sample
+//! ([`WorkspaceSettings::max_substeps`], a step that fails is halved, one that
+//! converges doubled) and an unbudgeted cold retry
+//! ([`WorkspaceSettings::cold_retry`]).
 //!
 //! **Hull.** The convex hull of the converged tips is the `chull` crate's exact
 //! (big-integer predicates) quickhull (Barber, Dobkin & Huhdanpaa, "The quickhull
@@ -53,12 +73,29 @@ pub struct WorkspaceSettings {
     pub chunk_samples: usize,
     /// Threads (0: the machine's available parallelism). Default 0.
     pub threads: usize,
-    /// Most solves of the continuation toward a sample whose direct warm solve
-    /// failed (module docs). Default 3.
+    /// Rod passes one readings solve may run while sampling
+    /// (`numerics.tendons.max_passes`; deterministic, unlike a time budget). A
+    /// budgeted solve runs the joint path only: the warm predictor and Newton from
+    /// the chain's last converged sample, then the path from reading 0 with what is
+    /// left, and never the nested fallback, whose shooting solves cost ~10 ms each
+    /// (module docs). `None`: unbudgeted, the nested fallback bounded by
+    /// `max_shooting_solves` (30 to 150 times slower per failing sample on FTDCR v4,
+    /// docs/command.md). Default `Some(400)`: a failing FTDCR v4 sample stalls after
+    /// about 80 passes on its own, a converged one takes 23 on average.
+    pub max_passes: Option<usize>,
+    /// Most solves of the continuation from the chain's last converged readings
+    /// toward a sample whose first solve failed (module docs). Default 0 (off: on
+    /// FTDCR v4 under the default budget one midpoint step solved none of 619
+    /// failed samples and cost 5 ms each).
     pub max_substeps: usize,
+    /// After everything else failed, one more solve from the straight rod
+    /// (`Start::Cold`), unbudgeted (the nested fallback included). Default false
+    /// (off: under a budget the first solve already ran the path from reading 0;
+    /// unbudgeted it costs 0.1 to 0.4 s a failing sample).
+    pub cold_retry: bool,
     /// Nested shooting solves one readings solve may run while sampling
-    /// (`numerics.tendons.max_shooting_solves`, lowered to this when above it): a
-    /// sample the solver cannot reach then fails after bounded work. Default 6.
+    /// (`numerics.tendons.max_shooting_solves`, lowered to this when above it):
+    /// bounds the unbudgeted solves (`max_passes = None`, `cold_retry`). Default 6.
     pub max_shooting_solves: usize,
     /// A point fixed to the tip body, in the tip's local frame (m): when given, each
     /// solved sample records it too ([`WorkspaceCloud::markers_m`]), e.g. a
@@ -74,7 +111,9 @@ impl Default for WorkspaceSettings {
             samples: 20_000,
             chunk_samples: 500,
             threads: 0,
-            max_substeps: 3,
+            max_passes: Some(400),
+            max_substeps: 0,
+            cold_retry: false,
             max_shooting_solves: 6,
             marker_offset_m: None,
         }
@@ -88,6 +127,7 @@ impl WorkspaceSettings {
             ("workspace.samples", self.samples),
             ("workspace.chunk_samples", self.chunk_samples),
             ("workspace.max_shooting_solves", self.max_shooting_solves),
+            ("workspace.max_passes", self.max_passes.unwrap_or(1)),
         ] {
             if v == 0 {
                 return Err(ModelError::OutOfRange {
@@ -96,6 +136,13 @@ impl WorkspaceSettings {
                     why: "at least 1".into(),
                 });
             }
+        }
+        if let Some(m) = self.max_passes.filter(|&m| m > 100_000) {
+            return Err(ModelError::OutOfRange {
+                field: "workspace.max_passes".into(),
+                value: m as f64,
+                why: "between 1 and 100000 (numerics.tendons.max_passes)".into(),
+            });
         }
         if let Some(o) = &self.marker_offset_m {
             ModelError::finite3("workspace.marker_offset_m", &[o.x, o.y, o.z])?;
@@ -107,13 +154,15 @@ impl WorkspaceSettings {
 /// How the readings solve of one sample ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SampleStatus {
-    /// Converged warm from the previous sample of its chain.
+    /// The first solve converged: warm from the chain's last converged sample
+    /// (under a budget, or on the path from reading 0 within the same budget).
     Converged,
-    /// Converged by continuation from the previous sample (module docs).
+    /// Converged by continuation from the chain's last converged sample
+    /// ([`WorkspaceSettings::max_substeps`]).
     ConvergedStepped,
-    /// The warm solve failed; a cold solve converged.
+    /// Converged by the cold retry ([`WorkspaceSettings::cold_retry`]).
     ConvergedCold,
-    /// Neither converged (or the readings were rejected): no tip.
+    /// No solve converged (or the readings were rejected): no tip, counted.
     Failed,
 }
 
@@ -148,6 +197,11 @@ pub struct WorkspaceCloud {
     pub markers_m: Vec<Vector3<f64>>,
     /// Status of each sample.
     pub status: Vec<SampleStatus>,
+    /// Work of each sample: rod passes of all its solves
+    /// ([`crate::tendons::TendonReport::forward_solves`], line-search trials and
+    /// the nested method's passes included). Deterministic, unlike a time: where
+    /// the sampling's time goes, per status ([`WorkspaceCloud::passes_by_status`]).
+    pub passes: Vec<u32>,
 }
 
 impl WorkspaceCloud {
@@ -192,6 +246,22 @@ impl WorkspaceCloud {
             .iter()
             .filter(|s| **s == SampleStatus::ConvergedStepped)
             .count()
+    }
+    /// Per status (converged, stepped, cold, failed): samples and their rod passes
+    /// summed.
+    pub fn passes_by_status(&self) -> [(usize, u64); 4] {
+        let mut out = [(0usize, 0u64); 4];
+        for (s, &p) in self.status.iter().zip(&self.passes) {
+            let i = match s {
+                SampleStatus::Converged => 0,
+                SampleStatus::ConvergedStepped => 1,
+                SampleStatus::ConvergedCold => 2,
+                SampleStatus::Failed => 3,
+            };
+            out[i].0 += 1;
+            out[i].1 += u64::from(p);
+        }
+        out
     }
     /// Samples that needed the cold retry.
     pub fn cold(&self) -> usize {

@@ -5,42 +5,56 @@ use super::sequence::{nearest_neighbour_order, nth_prime, radical_inverse};
 use super::{SampleStatus, WorkspaceCloud, WorkspaceSettings};
 use crate::error::ModelError;
 use crate::robot::ActuatorLimits;
+use crate::settings::TendonSettings;
 use crate::statics::Start;
 use crate::tendons::TendonWorkspace;
 use nalgebra::Vector3;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+/// One solve of `q` from `start`: converged or not, its rod passes added to `work`.
+fn solve_ok(ws: &mut TendonWorkspace, q: &[f64], start: Start, work: &mut u32) -> bool {
+    match ws.solve_readings_from(q, start) {
+        Ok(r) => {
+            *work = work.saturating_add(u32::try_from(r.forward_solves).unwrap_or(u32::MAX));
+            r.status.is_converged()
+        }
+        Err(_) => false,
+    }
+}
+
 /// Solve one sample's readings `q`, warm from the chain's last converged readings
-/// `from` (updated on success): directly; else by continuation along the segment
-/// from `from` to `q` (a step that fails is halved, one that converges is doubled,
-/// at most `max_substeps` solves); else cold. `buf` is scratch of `q`'s length.
+/// `from` (updated on success): directly; else, when `settings.max_substeps > 0`,
+/// by continuation along the segment from `from` to `q` (a step that fails is
+/// halved, one that converges is doubled, at most `max_substeps` solves); else,
+/// with `settings.cold_retry`, cold without a budget (`cold`: the workspace's
+/// settings for it). `buf` is scratch of `q`'s length. Returns the status and the
+/// rod passes spent.
 fn solve_sample(
     ws: &mut TendonWorkspace,
     q: &[f64],
     from: &mut [f64],
     buf: &mut [f64],
-    max_substeps: usize,
-) -> SampleStatus {
-    let ok = |r: Result<crate::tendons::TendonReport, ModelError>| {
-        r.is_ok_and(|r| r.status.is_converged())
-    };
-    if ok(ws.solve_readings(q)) {
+    settings: &WorkspaceSettings,
+    cold: &Option<(TendonSettings, TendonSettings)>,
+) -> (SampleStatus, u32) {
+    let mut work = 0u32;
+    if solve_ok(ws, q, Start::Warm, &mut work) {
         from.copy_from_slice(q);
-        return SampleStatus::Converged;
+        return (SampleStatus::Converged, work);
     }
     // (a failed solve is rolled back: the warm state is `from`'s again)
     let (mut t, mut h) = (0.0f64, 0.5f64);
-    for _ in 0..max_substeps {
+    for _ in 0..settings.max_substeps {
         let tn = (t + h).min(1.0);
         for ((b, a), z) in buf.iter_mut().zip(from.iter()).zip(q) {
             *b = a + tn * (z - a);
         }
-        if ok(ws.solve_readings(buf)) {
+        if solve_ok(ws, buf, Start::Warm, &mut work) {
             t = tn;
             if t >= 1.0 {
                 from.copy_from_slice(q);
-                return SampleStatus::ConvergedStepped;
+                return (SampleStatus::ConvergedStepped, work);
             }
             h *= 2.0;
         } else {
@@ -54,11 +68,19 @@ fn solve_sample(
         }
         from.copy_from_slice(buf);
     }
-    if ok(ws.solve_readings_from(q, Start::Cold)) {
-        from.copy_from_slice(q);
-        return SampleStatus::ConvergedCold;
+    if let Some((unbudgeted, budgeted)) = cold {
+        // (settings valid: checked when the chain's workspace was set up)
+        let ok =
+            ws.set_tendon_settings(*unbudgeted).is_ok() && solve_ok(ws, q, Start::Cold, &mut work);
+        if ok {
+            from.copy_from_slice(q);
+        }
+        let _ = ws.set_tendon_settings(*budgeted);
+        if ok {
+            return (SampleStatus::ConvergedCold, work);
+        }
     }
-    SampleStatus::Failed
+    (SampleStatus::Failed, work)
 }
 
 /// Sample the reachable workspace of `tw` over the box of `limits` (every driven
@@ -94,9 +116,17 @@ pub fn sample_workspace(
         });
     }
     let mut base = tw.clone();
-    let mut ts = *base.tendon_settings();
-    ts.max_shooting_solves = ts.max_shooting_solves.min(settings.max_shooting_solves);
+    let mut unbudgeted = *base.tendon_settings();
+    unbudgeted.max_shooting_solves = unbudgeted
+        .max_shooting_solves
+        .min(settings.max_shooting_solves);
+    unbudgeted.max_passes = None;
+    unbudgeted.time_budget_s = None;
+    let mut ts = unbudgeted;
+    ts.max_passes = settings.max_passes;
+    unbudgeted.validate()?;
     base.set_tendon_settings(ts)?;
+    let cold = settings.cold_retry.then_some((unbudgeted, ts));
     let n = settings.samples;
     // unit-cube Halton points k = 1..=n (k = 0 is the corner q_min)
     let mut unit = Vec::with_capacity(n * p);
@@ -133,7 +163,7 @@ pub fn sample_workspace(
     .max(1);
     let next_chunk = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
-    type Row = (usize, Vector3<f64>, Vector3<f64>, SampleStatus);
+    type Row = (usize, Vector3<f64>, Vector3<f64>, SampleStatus, u32);
     let results: Mutex<Vec<Row>> = Mutex::new(Vec::with_capacity(n));
     let first_error: Mutex<Option<ModelError>> = Mutex::new(None);
     std::thread::scope(|s| {
@@ -149,19 +179,16 @@ pub fn sample_workspace(
                 // each chain starts from reading 0 (a known converged state)
                 let mut from = vec![0.0; p];
                 let mut buf = vec![0.0; p];
-                let start_ok = ws
-                    .solve_readings(&from)
-                    .is_ok_and(|r| r.status.is_converged())
-                    || ws
-                        .solve_readings_from(&from, Start::Cold)
-                        .is_ok_and(|r| r.status.is_converged());
+                let mut w0 = 0u32;
+                let start_ok = solve_ok(&mut ws, &from, Start::Warm, &mut w0)
+                    || solve_ok(&mut ws, &from, Start::Cold, &mut w0);
                 for j in order {
                     let k = range.start + j;
                     let q = &readings_m[k * p..(k + 1) * p];
-                    let status = if start_ok {
-                        solve_sample(&mut ws, q, &mut from, &mut buf, settings.max_substeps)
+                    let (status, work) = if start_ok {
+                        solve_sample(&mut ws, q, &mut from, &mut buf, settings, &cold)
                     } else {
-                        SampleStatus::Failed
+                        (SampleStatus::Failed, 0)
                     };
                     let nan = Vector3::repeat(f64::NAN);
                     let (tip, marker) = if status.is_solved() {
@@ -177,7 +204,7 @@ pub fn sample_workspace(
                     } else {
                         (nan, nan)
                     };
-                    out.push((k, tip, marker, status));
+                    out.push((k, tip, marker, status, work));
                     progress(done.fetch_add(1, Ordering::Relaxed) + 1);
                 }
                 match results.lock() {
@@ -204,10 +231,12 @@ pub fn sample_workspace(
     let mut tips_m = vec![Vector3::repeat(f64::NAN); n];
     let mut markers_m = vec![Vector3::repeat(f64::NAN); n];
     let mut status = vec![SampleStatus::Failed; n];
-    for (k, t, m, s) in results {
+    let mut passes = vec![0u32; n];
+    for (k, t, m, s, w) in results {
         tips_m[k] = t;
         markers_m[k] = m;
         status[k] = s;
+        passes[k] = w;
     }
     if settings.marker_offset_m.is_none() {
         markers_m.clear();
@@ -218,5 +247,6 @@ pub fn sample_workspace(
         tips_m,
         markers_m,
         status,
+        passes,
     })
 }
