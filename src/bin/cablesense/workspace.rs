@@ -12,7 +12,9 @@
 use crate::progress;
 use anyhow::{bail, Context};
 use cablesense::calibrate::{Recording, RigidTransform};
-use cablesense::command::{sample_workspace, Hull, WorkspaceCloud, WorkspaceSettings};
+use cablesense::command::{
+    sample_workspace, Hull, SampleStatus, WorkspaceCloud, WorkspaceSettings,
+};
 use cablesense::files::svg::escape;
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{column_map, TRAIN_CSV, VAL_CSV};
@@ -164,7 +166,13 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     write_obj(&hull, &name, &a.output.join("hull.obj"))?;
     // where the work went: rod passes per status (deterministic, unlike times)
     let work = cloud.passes_by_status();
-    let names = ["converged", "converged_stepped", "converged_cold", "failed"];
+    let names = [
+        SampleStatus::Converged,
+        SampleStatus::ConvergedStepped,
+        SampleStatus::ConvergedCold,
+        SampleStatus::Failed,
+    ]
+    .map(SampleStatus::name);
     let total_passes: u64 = work.iter().map(|w| w.1).sum();
     let work_json: serde_json::Map<String, serde_json::Value> = names
         .iter()

@@ -29,16 +29,17 @@
 //! chain's last converged sample, and when they do not reach the sample, the joint
 //! path from the reference equilibrium at reading 0 with what is left; the nested
 //! fallback (a full shooting solve per tension iterate) is not run. Measured on the
-//! calibrated FTDCR v4 (docs/command.md): a converged sample takes about 23 passes,
-//! a failing one stalls after about 80 on its own, where the unbudgeted solve with
-//! its nested fallback spent about 1100 passes and 0.4 s on it. The samples that
+//! calibrated FTDCR v4 (docs/command.md): a converged sample takes about 24 passes,
+//! a failing one stalls after about 77 on its own, where the unbudgeted solve with
+//! its nested fallback spent about 950 passes and 0.4 s on it. The samples that
 //! fail are counted ([`SampleStatus::Failed`]), never dropped. What fails: on FTDCR
 //! v4, samples that pull all three tendons of one section at once (the distal one
 //! mostly); continuing to such a sample from reading 0 along a straight line, with
-//! steps of 1/40 and then 1/1600 of the way, stalls at the same reading with every
-//! tendon of that section taut at 5 to 13 N (a turning point of the equilibrium
-//! along the path), and paths that move one section at a time or the pay-outs first
-//! stall too. Optional, off by default (they found few more samples at many times
+//! steps refined down to 1/2560 of the way, stalled for 11 of 12 probed samples,
+//! 47 to 89 % of the way, with every tendon of one section taut at 3.7 to 15.9 N (a
+//! turning point of the equilibrium along the path), and paths that move one
+//! section at a time or the pay-outs first reached 1 of the 12
+//! (`examples/workspace_failures.rs`). Optional, off by default (they found few more samples at many times
 //! the cost): a continuation from the last converged sample
 //! ([`WorkspaceSettings::max_substeps`], a step that fails is halved, one that
 //! converges doubled) and an unbudgeted cold retry
@@ -79,14 +80,15 @@ pub struct WorkspaceSettings {
     /// the chain's last converged sample, then the path from reading 0 with what is
     /// left, and never the nested fallback, whose shooting solves cost ~10 ms each
     /// (module docs). `None`: unbudgeted, the nested fallback bounded by
-    /// `max_shooting_solves` (30 to 150 times slower per failing sample on FTDCR v4,
-    /// docs/command.md). Default `Some(400)`: a failing FTDCR v4 sample stalls after
-    /// about 80 passes on its own, a converged one takes 23 on average.
+    /// `max_shooting_solves` (on FTDCR v4 about 950 rod passes and 0.4 s a failing
+    /// sample, against 77 passes and 5 ms budgeted; docs/command.md). Default
+    /// `Some(400)`: a failing FTDCR v4 sample stalls after about 77 passes on its
+    /// own, a converged one takes 24 on average.
     pub max_passes: Option<usize>,
     /// Most solves of the continuation from the chain's last converged readings
     /// toward a sample whose first solve failed (module docs). Default 0 (off: on
-    /// FTDCR v4 under the default budget one midpoint step solved none of 619
-    /// failed samples and cost 5 ms each).
+    /// 2000 FTDCR v4 samples under the default budget one midpoint step moved the
+    /// solved count from 1377 to 1381 at 5 ms more a failed sample).
     pub max_substeps: usize,
     /// After everything else failed, one more solve from the straight rod
     /// (`Start::Cold`), unbudgeted (the nested fallback included). Default false
