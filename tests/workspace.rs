@@ -123,6 +123,54 @@ fn ftdcr_tips_lie_in_their_hull_whatever_the_threads() {
     assert!(one.status.iter().all(|s| *s != SampleStatus::Failed));
 }
 
+/// The shipped limits box of the calibrated FTDCR v4 has samples the solver does
+/// not reach: they are reported (status `failed`, NaN tip, their work counted), the
+/// counts add up, each sample's work stays within its budget, and the cloud, failures
+/// included, is the same for one thread or two (one chain per chunk, each from
+/// reading 0).
+#[test]
+fn ftdcr_full_box_counts_failures_whatever_the_threads() {
+    let scene = Scene::load(FTDCR).unwrap();
+    let limits = scene.actuator_limits().unwrap();
+    let tw = scene.tendon_workspace().unwrap();
+    let n = 48;
+    let settings = |threads| WorkspaceSettings {
+        samples: n,
+        chunk_samples: 12,
+        threads,
+        ..WorkspaceSettings::default()
+    };
+    let one = sample_workspace(&tw, &limits, &settings(1), &|_| {}).unwrap();
+    let two = sample_workspace(&tw, &limits, &settings(2), &|_| {}).unwrap();
+    // (bit for bit: a failed sample's NaN tip is not `==` to itself)
+    let bits = |c: &cablesense::command::WorkspaceCloud| -> Vec<u64> {
+        c.tips_m
+            .iter()
+            .flat_map(|t| t.iter().map(|v| v.to_bits()))
+            .collect()
+    };
+    assert_eq!(one.status, two.status);
+    assert_eq!(one.passes, two.passes);
+    assert_eq!(bits(&one), bits(&two));
+    assert_eq!(one.readings_m, two.readings_m);
+    assert_eq!((one.len(), one.passes.len()), (n, n));
+    let by = one.passes_by_status();
+    assert_eq!(by.iter().map(|b| b.0).sum::<usize>(), n);
+    assert_eq!(by[3].0, one.failed());
+    assert!(one.failed() > 0 && one.failed() < n / 2, "{:?}", by);
+    assert_eq!(one.solved_tips().len() + one.failed(), n);
+    for k in 0..n {
+        let solved = one.status[k].is_solved();
+        assert_eq!(solved, one.tips_m[k].iter().all(|v| v.is_finite()), "{k}");
+        // one budgeted solve per sample by default: at most max_passes rod passes
+        assert!(
+            one.passes[k] > 0 && one.passes[k] <= 400,
+            "{k}: {}",
+            one.passes[k]
+        );
+    }
+}
+
 #[test]
 fn workspace_bad_inputs_name_the_field() {
     let (scene, limits) = small_box();
@@ -149,6 +197,14 @@ fn workspace_bad_inputs_name_the_field() {
         e.contains("limits.servo_2_mm") && e.contains("excludes reading 0"),
         "{e}"
     );
+    let budget = WorkspaceSettings {
+        max_passes: Some(0),
+        ..few.clone()
+    };
+    let e = sample_workspace(&tw, &limits, &budget, &none)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("workspace.max_passes"), "{e}");
     let e = sample_workspace(&tw, &ActuatorLimits::unbounded(9), &few, &none)
         .unwrap_err()
         .to_string();
@@ -195,6 +251,22 @@ fn cli_writes_cloud_hull_svg_and_coverage() {
     let cloud = std::fs::read_to_string(out.join("cloud.csv")).unwrap();
     assert_eq!(cloud.lines().count(), 41);
     assert!(cloud.starts_with("sample,servo_4_mm,"), "{}", &cloud[..80]);
+    assert!(
+        cloud
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(",status,rod_passes"),
+        "{}",
+        cloud.lines().next().unwrap()
+    );
+    let work = &summary["rod_passes"];
+    let counted: u64 = ["converged", "converged_stepped", "converged_cold", "failed"]
+        .iter()
+        .map(|s| work[s]["samples"].as_u64().unwrap())
+        .sum();
+    assert_eq!(counted, 40);
+    assert_eq!(work["failed"]["samples"], summary["failed"]);
     assert!(cloud.lines().nth(1).unwrap().contains("marker_x_m") || cloud.contains("marker_x_m"));
     let obj = std::fs::read_to_string(out.join("hull.obj")).unwrap();
     assert!(obj.lines().any(|l| l.starts_with("f ")));

@@ -12,7 +12,9 @@
 use crate::progress;
 use anyhow::{bail, Context};
 use cablesense::calibrate::{Recording, RigidTransform};
-use cablesense::command::{sample_workspace, Hull, WorkspaceCloud, WorkspaceSettings};
+use cablesense::command::{
+    sample_workspace, Hull, SampleStatus, WorkspaceCloud, WorkspaceSettings,
+};
 use cablesense::files::svg::escape;
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{column_map, TRAIN_CSV, VAL_CSV};
@@ -47,9 +49,24 @@ pub struct Args {
     /// scene: the embedded FTDCR v4 val.csv.
     #[arg(long)]
     val: Option<PathBuf>,
-    /// Threads (0: all cores).
+    /// Threads (0: all cores). The cloud does not depend on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Samples per warm chain (nearest-neighbour order within it).
+    #[arg(long, default_value_t = 500)]
+    chunk: usize,
+    /// Rod passes one readings solve may run (deterministic budget; 0: unbudgeted,
+    /// with the nested fallback, many times slower per failing sample).
+    #[arg(long, default_value_t = 400)]
+    max_passes: usize,
+    /// Solves of the continuation from the chain's last converged sample toward a
+    /// sample whose first solve failed (0: none).
+    #[arg(long, default_value_t = 0)]
+    substeps: usize,
+    /// After everything else failed, one more unbudgeted solve from the straight
+    /// rod (slow: 0.1 to 0.4 s a failing sample on FTDCR v4).
+    #[arg(long)]
+    cold_retry: bool,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -85,6 +102,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if a.samples == 0 {
         bail!("--samples must be at least 1 (got 0)");
     }
+    if a.chunk == 0 {
+        bail!("--chunk must be at least 1 (got 0)");
+    }
     let (scene, name) = crate::reach::scene_or_calibrated(a.scene.as_deref())?;
     let recording = match (&a.recording, &a.scene) {
         (Some(f), _) => Some(measured(&scene, &f.display().to_string(), &read(f)?)?),
@@ -113,6 +133,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let settings = WorkspaceSettings {
         samples: a.samples,
         threads: a.threads,
+        chunk_samples: a.chunk,
+        max_passes: (a.max_passes > 0).then_some(a.max_passes),
+        max_substeps: a.substeps,
+        cold_retry: a.cold_retry,
         marker_offset_m: marker_offset,
         ..WorkspaceSettings::default()
     };
@@ -140,6 +164,36 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let scale = scene.readings_scale_m();
     write_cloud(&cloud, scale, &a.output.join("cloud.csv"))?;
     write_obj(&hull, &name, &a.output.join("hull.obj"))?;
+    // where the work went: rod passes per status (deterministic, unlike times)
+    let work = cloud.passes_by_status();
+    let names = [
+        SampleStatus::Converged,
+        SampleStatus::ConvergedStepped,
+        SampleStatus::ConvergedCold,
+        SampleStatus::Failed,
+    ]
+    .map(SampleStatus::name);
+    let total_passes: u64 = work.iter().map(|w| w.1).sum();
+    let work_json: serde_json::Map<String, serde_json::Value> = names
+        .iter()
+        .zip(&work)
+        .map(|(n, (c, w))| {
+            (
+                n.to_string(),
+                serde_json::json!({ "samples": c, "passes": w }),
+            )
+        })
+        .collect();
+    let work_line = format!(
+        "rod passes: {total_passes} in all; per sample {}",
+        names
+            .iter()
+            .zip(&work)
+            .filter(|(_, (c, _))| *c > 0)
+            .map(|(n, (c, w))| format!("{n} {:.1}", *w as f64 / *c as f64))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     // coverage of a recording
     let mut summary = serde_json::json!({
         "scene": name,
@@ -149,6 +203,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         "solved_cold": cloud.cold(),
         "failed": cloud.failed(),
         "sampling_s": sample_s,
+        "chunk_samples": settings.chunk_samples,
+        "max_passes": settings.max_passes,
+        "max_substeps": settings.max_substeps,
+        "cold_retry": settings.cold_retry,
+        "rod_passes": work_json,
         "hull_vertices": hull.vertices.len(),
         "hull_triangles": hull.triangles.len(),
         "hull_volume_m3": hull.volume_m3,
@@ -166,6 +225,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         cloud.failed(),
         sample_s
     )];
+    lines.push(work_line);
     lines.push(format!(
         "convex hull: {} vertices, {} triangles, volume {:.1} cm^3 ({:.3e} m^3); solved tips outside it: {outside}",
         hull.vertices.len(),
@@ -301,7 +361,7 @@ fn write_cloud(cloud: &WorkspaceCloud, scale: f64, path: &Path) -> anyhow::Resul
     let markers = !cloud.markers_m.is_empty();
     writeln!(
         s,
-        "sample,{},tip_x_m,tip_y_m,tip_z_m,{}status",
+        "sample,{},tip_x_m,tip_y_m,tip_z_m,{}status,rod_passes",
         cloud.columns.join(","),
         if markers {
             "marker_x_m,marker_y_m,marker_z_m,"
@@ -321,7 +381,7 @@ fn write_cloud(cloud: &WorkspaceCloud, scale: f64, path: &Path) -> anyhow::Resul
             let m = cloud.markers_m[k];
             write!(s, "{},{},{},", m.x, m.y, m.z)?;
         }
-        writeln!(s, "{}", cloud.status[k].name())?;
+        writeln!(s, "{},{}", cloud.status[k].name(), cloud.passes[k])?;
     }
     std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
 }

@@ -1,0 +1,252 @@
+//! Solving the sampled readings in warm chains, in parallel (module docs of
+//! [`super`]).
+
+use super::sequence::{nearest_neighbour_order, nth_prime, radical_inverse};
+use super::{SampleStatus, WorkspaceCloud, WorkspaceSettings};
+use crate::error::ModelError;
+use crate::robot::ActuatorLimits;
+use crate::settings::TendonSettings;
+use crate::statics::Start;
+use crate::tendons::TendonWorkspace;
+use nalgebra::Vector3;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// One solve of `q` from `start`: converged or not, its rod passes added to `work`.
+fn solve_ok(ws: &mut TendonWorkspace, q: &[f64], start: Start, work: &mut u32) -> bool {
+    match ws.solve_readings_from(q, start) {
+        Ok(r) => {
+            *work = work.saturating_add(u32::try_from(r.forward_solves).unwrap_or(u32::MAX));
+            r.status.is_converged()
+        }
+        Err(_) => false,
+    }
+}
+
+/// Solve one sample's readings `q`, warm from the chain's last converged readings
+/// `from` (updated on success): directly; else, when `settings.max_substeps > 0`,
+/// by continuation along the segment from `from` to `q` (a step that fails is
+/// halved, one that converges is doubled, at most `max_substeps` solves); else,
+/// with `settings.cold_retry`, cold without a budget (`cold`: the workspace's
+/// settings for it). `buf` is scratch of `q`'s length. Returns the status and the
+/// rod passes spent.
+fn solve_sample(
+    ws: &mut TendonWorkspace,
+    q: &[f64],
+    from: &mut [f64],
+    buf: &mut [f64],
+    settings: &WorkspaceSettings,
+    cold: &Option<(TendonSettings, TendonSettings)>,
+) -> (SampleStatus, u32) {
+    let mut work = 0u32;
+    if solve_ok(ws, q, Start::Warm, &mut work) {
+        from.copy_from_slice(q);
+        return (SampleStatus::Converged, work);
+    }
+    // (a failed solve is rolled back: the warm state is `from`'s again)
+    let (mut t, mut h) = (0.0f64, 0.5f64);
+    for _ in 0..settings.max_substeps {
+        let tn = (t + h).min(1.0);
+        for ((b, a), z) in buf.iter_mut().zip(from.iter()).zip(q) {
+            *b = a + tn * (z - a);
+        }
+        if solve_ok(ws, buf, Start::Warm, &mut work) {
+            t = tn;
+            if t >= 1.0 {
+                from.copy_from_slice(q);
+                return (SampleStatus::ConvergedStepped, work);
+            }
+            h *= 2.0;
+        } else {
+            h *= 0.5;
+        }
+    }
+    if t > 0.0 {
+        // the chain moved part of the way: that point is converged
+        for ((b, a), z) in buf.iter_mut().zip(from.iter()).zip(q) {
+            *b = a + t * (z - a);
+        }
+        from.copy_from_slice(buf);
+    }
+    if let Some((unbudgeted, budgeted)) = cold {
+        // (settings valid: checked when the chain's workspace was set up)
+        let ok =
+            ws.set_tendon_settings(*unbudgeted).is_ok() && solve_ok(ws, q, Start::Cold, &mut work);
+        if ok {
+            from.copy_from_slice(q);
+        }
+        let _ = ws.set_tendon_settings(*budgeted);
+        if ok {
+            return (SampleStatus::ConvergedCold, work);
+        }
+    }
+    (SampleStatus::Failed, work)
+}
+
+/// Sample the reachable workspace of `tw` over the box of `limits` (every driven
+/// tendon bounded) by `settings.samples` Halton points, chained and solved in
+/// parallel (module docs). `progress` is called with the number of samples done
+/// after each one (from any thread). Errors: limits that are missing (unbounded),
+/// of the wrong length, unordered or excluding 0, and settings out of range.
+/// Samples that do not solve are counted in the cloud ([`SampleStatus::Failed`]),
+/// not an error.
+pub fn sample_workspace(
+    tw: &TendonWorkspace,
+    limits: &ActuatorLimits,
+    settings: &WorkspaceSettings,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<WorkspaceCloud, ModelError> {
+    settings.validate()?;
+    let columns = tw.columns().to_vec();
+    limits.validate(&columns)?;
+    let p = columns.len();
+    if p == 0 {
+        return Err(ModelError::Invalid {
+            field: "robot.cables".into(),
+            why: "no displacement-driven tendon: there are no readings to sample".into(),
+        });
+    }
+    if let Some(i) = (0..p).find(|&i| !(limits.min_m[i].is_finite() && limits.max_m[i].is_finite()))
+    {
+        return Err(ModelError::Invalid {
+            field: format!("robot.limits ({})", columns[i]),
+            why: "the workspace samples the actuator box: every driven tendon needs finite \
+                  limits (give [robot.limits] default, sections or tendons)"
+                .into(),
+        });
+    }
+    let mut base = tw.clone();
+    let mut unbudgeted = *base.tendon_settings();
+    unbudgeted.max_shooting_solves = unbudgeted
+        .max_shooting_solves
+        .min(settings.max_shooting_solves);
+    unbudgeted.max_passes = None;
+    unbudgeted.time_budget_s = None;
+    let mut ts = unbudgeted;
+    ts.max_passes = settings.max_passes;
+    unbudgeted.validate()?;
+    base.set_tendon_settings(ts)?;
+    let cold = settings.cold_retry.then_some((unbudgeted, ts));
+    let n = settings.samples;
+    // unit-cube Halton points k = 1..=n (k = 0 is the corner q_min)
+    let mut unit = Vec::with_capacity(n * p);
+    let bases: Vec<u64> = (0..p).map(nth_prime).collect();
+    for k in 1..=n as u64 {
+        unit.extend(bases.iter().map(|&b| radical_inverse(k, b)));
+    }
+    let mut readings_m = vec![0.0; n * p];
+    for (k, u) in unit.chunks(p).enumerate() {
+        for i in 0..p {
+            readings_m[k * p + i] = limits.min_m[i] + u[i] * (limits.max_m[i] - limits.min_m[i]);
+        }
+    }
+    // reading 0 in the unit cube: where each chain starts (the workspace's reference)
+    let zero_unit: Vec<f64> = (0..p)
+        .map(|i| {
+            let w = limits.max_m[i] - limits.min_m[i];
+            if w > 0.0 {
+                -limits.min_m[i] / w
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let chunks: Vec<std::ops::Range<usize>> = (0..n)
+        .step_by(settings.chunk_samples)
+        .map(|s| s..(s + settings.chunk_samples).min(n))
+        .collect();
+    let threads = match settings.threads {
+        0 => std::thread::available_parallelism().map_or(1, |t| t.get()),
+        t => t,
+    }
+    .min(chunks.len())
+    .max(1);
+    let next_chunk = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    type Row = (usize, Vector3<f64>, Vector3<f64>, SampleStatus, u32);
+    let results: Mutex<Vec<Row>> = Mutex::new(Vec::with_capacity(n));
+    let first_error: Mutex<Option<ModelError>> = Mutex::new(None);
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| loop {
+                let c = next_chunk.fetch_add(1, Ordering::Relaxed);
+                let Some(range) = chunks.get(c) else { break };
+                // a fresh copy per chunk: the result does not depend on the threads
+                let mut ws = base.clone();
+                let order =
+                    nearest_neighbour_order(&unit[range.start * p..range.end * p], p, &zero_unit);
+                let mut out = Vec::with_capacity(order.len());
+                // each chain starts from reading 0 (a known converged state)
+                let mut from = vec![0.0; p];
+                let mut buf = vec![0.0; p];
+                let mut w0 = 0u32;
+                let start_ok = solve_ok(&mut ws, &from, Start::Warm, &mut w0)
+                    || solve_ok(&mut ws, &from, Start::Cold, &mut w0);
+                for j in order {
+                    let k = range.start + j;
+                    let q = &readings_m[k * p..(k + 1) * p];
+                    let (status, work) = if start_ok {
+                        solve_sample(&mut ws, q, &mut from, &mut buf, settings, &cold)
+                    } else {
+                        (SampleStatus::Failed, 0)
+                    };
+                    let nan = Vector3::repeat(f64::NAN);
+                    let (tip, marker) = if status.is_solved() {
+                        let tip = ws.tip_position();
+                        let marker = match settings.marker_offset_m {
+                            Some(o) => {
+                                let pose = *ws.workspace_mut().solution().tip();
+                                pose.position + pose.rotation * o
+                            }
+                            None => nan,
+                        };
+                        (tip, marker)
+                    } else {
+                        (nan, nan)
+                    };
+                    out.push((k, tip, marker, status, work));
+                    progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                }
+                match results.lock() {
+                    Ok(mut r) => r.extend(out),
+                    Err(_) => {
+                        if let Ok(mut e) = first_error.lock() {
+                            e.get_or_insert(ModelError::Invalid {
+                                field: "workspace".into(),
+                                why: "a sampling thread failed".into(),
+                            });
+                        }
+                    }
+                }
+            });
+        }
+    });
+    if let Some(e) = first_error.into_inner().ok().flatten() {
+        return Err(e);
+    }
+    let results = results.into_inner().map_err(|_| ModelError::Invalid {
+        field: "workspace".into(),
+        why: "a sampling thread failed".into(),
+    })?;
+    let mut tips_m = vec![Vector3::repeat(f64::NAN); n];
+    let mut markers_m = vec![Vector3::repeat(f64::NAN); n];
+    let mut status = vec![SampleStatus::Failed; n];
+    let mut passes = vec![0u32; n];
+    for (k, t, m, s, w) in results {
+        tips_m[k] = t;
+        markers_m[k] = m;
+        status[k] = s;
+        passes[k] = w;
+    }
+    if settings.marker_offset_m.is_none() {
+        markers_m.clear();
+    }
+    Ok(WorkspaceCloud {
+        columns,
+        readings_m,
+        tips_m,
+        markers_m,
+        status,
+        passes,
+    })
+}
