@@ -29,6 +29,7 @@ mod arc;
 mod auto;
 mod auto_readings;
 mod cc;
+mod grid;
 mod kinematics;
 mod pcc;
 mod readings;
@@ -41,6 +42,7 @@ pub use auto::{
 };
 pub use auto_readings::{choose_readings, probe_rows, PROBE_ROWS};
 pub use cc::{CcSettings, ConstantCurvature};
+pub use grid::{CurvatureRungs, LadderGrid, MassChoice};
 pub use kinematics::TendonKinematics;
 pub use pcc::{PccSettings, PiecewiseConstantCurvature};
 pub use readings::{readings_ladder, ReadingsModel};
@@ -312,88 +314,14 @@ pub fn guide_mass_choices(robot: &Robot) -> Vec<GuideMass> {
 /// Kirchhoff and Cosserat with every relevant guide-mass model, RK4 at 4..64 steps
 /// per section and the adaptive pair at tol 1e-4..1e-10.
 pub fn full_ladder(robot: &Robot) -> Vec<Rung> {
-    let mut out = Vec::new();
-    let curvature = reject_continuous(robot).is_ok();
-    if curvature {
-        out.push(Rung::ConstantCurvature(CcSettings::default()));
-    }
-    let masses = guide_mass_choices(robot);
-    for &g in masses.iter().filter(|_| curvature) {
-        for pieces in [4, 8, 16, 32] {
-            out.push(Rung::PiecewiseConstantCurvature(PccSettings {
-                pieces_per_section: pieces,
-                guide_mass: g,
-                ..PccSettings::default()
-            }));
-        }
-    }
-    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
-        for &g in &masses {
-            let mut ints: Vec<Integrator> = [4, 8, 16, 32, 64]
-                .into_iter()
-                .map(|n| Integrator::Rk4 {
-                    steps_per_section: n,
-                })
-                .collect();
-            ints.extend([1e-4, 1e-6, 1e-8, 1e-10].map(|tol| Integrator::Adaptive {
-                tol,
-                max_steps: 100_000,
-            }));
-            for integrator in ints {
-                out.push(Rung::Rod(SolverSettings {
-                    rod_model: model,
-                    guide_mass: g,
-                    integrator,
-                    ..SolverSettings::default()
-                }));
-            }
-        }
-    }
-    out
+    LadderGrid::full().rungs(robot)
 }
 
 /// A smaller ladder for `--model auto` (each candidate is solved on every probe load):
 /// CC; PCC 4/16; Kirchhoff and Cosserat with each guide-mass model at RK4 4, 8, 16,
 /// 32, 64 steps per section and adaptive 1e-8.
 pub fn auto_ladder(robot: &Robot) -> Vec<Rung> {
-    let mut out = Vec::new();
-    let curvature = reject_continuous(robot).is_ok();
-    if curvature {
-        out.push(Rung::ConstantCurvature(CcSettings::default()));
-    }
-    let masses = guide_mass_choices(robot);
-    for &g in masses.iter().filter(|_| curvature) {
-        for pieces in [4, 16] {
-            out.push(Rung::PiecewiseConstantCurvature(PccSettings {
-                pieces_per_section: pieces,
-                guide_mass: g,
-                ..PccSettings::default()
-            }));
-        }
-    }
-    for model in [RodModel::Kirchhoff, RodModel::Cosserat] {
-        for &g in &masses {
-            let mut ints: Vec<Integrator> = [4, 8, 16, 32, 64]
-                .into_iter()
-                .map(|n| Integrator::Rk4 {
-                    steps_per_section: n,
-                })
-                .collect();
-            ints.push(Integrator::Adaptive {
-                tol: 1e-8,
-                max_steps: 100_000,
-            });
-            for integrator in ints {
-                out.push(Rung::Rod(SolverSettings {
-                    rod_model: model,
-                    guide_mass: g,
-                    integrator,
-                    ..SolverSettings::default()
-                }));
-            }
-        }
-    }
-    out
+    LadderGrid::auto().rungs(robot)
 }
 
 /// Load parameters added to resolved loads, or the site that is invalid.

@@ -13,11 +13,10 @@
 //! --readings FILE --model auto`), and `cablesense pareto` charts them (its TDCR rows,
 //! module `crate::experiments`).
 
-use super::{CcSettings, ConstantCurvature, LadderError, LadderReport, PccSettings};
+use super::{ConstantCurvature, LadderError, LadderReport};
 use super::{PiecewiseConstantCurvature, Rung};
 use crate::loads::Loads;
 use crate::robot::Robot;
-use crate::settings::{CableCoupling, Integrator, SolverSettings};
 use crate::statics::Start;
 use crate::tendons::TendonWorkspace;
 use nalgebra::Vector3;
@@ -138,42 +137,10 @@ fn zeros(robot: &Robot) -> Vec<f64> {
 /// iteration of shooting solves, so the finer adaptive settings of the full ladder
 /// would dominate the sweep's time without adding a point to the front. On a robot
 /// with disks, each RK4 rod setting also with the arc coupling (label `.../arc`,
-/// [`CableCoupling::Arc`]): the cheaper disk coupling of a tendon robot (on the FTDCR
+/// [`crate::settings::CableCoupling::Arc`]): the cheaper disk coupling of a tendon robot (on the FTDCR
 /// v4 val rows 0.61x the instructions of the default coupling, tips within 84 um of
 /// it; `tests/arc_coupling.rs`). Not with the adaptive setting: its steps, not the
 /// coupling, set its cost.
 pub fn readings_ladder(robot: &Robot) -> Vec<Rung> {
-    let mut out = Vec::new();
-    let curvature = super::reject_continuous(robot).is_ok();
-    if curvature {
-        out.push(Rung::ConstantCurvature(CcSettings::default()));
-    }
-    for pieces in [4, 16].into_iter().filter(|_| curvature) {
-        out.push(Rung::PiecewiseConstantCurvature(PccSettings {
-            pieces_per_section: pieces,
-            guide_mass: crate::settings::GuideMass::None,
-            ..PccSettings::default()
-        }));
-    }
-    let rods: Vec<Rung> = super::auto_ladder(robot)
-        .into_iter()
-        .filter(|r| matches!(r, Rung::Rod(_)))
-        .collect();
-    // the arc coupling's twins of the fixed-step rod rungs, when tendons pass disks
-    let disks = !robot.guides().is_empty();
-    let arcs: Vec<Rung> = rods
-        .iter()
-        .filter_map(|r| match r {
-            Rung::Rod(s) if disks && matches!(s.integrator, Integrator::Rk4 { .. }) => {
-                Some(Rung::Rod(SolverSettings {
-                    cable_coupling: CableCoupling::Arc,
-                    ..s.clone()
-                }))
-            }
-            _ => None,
-        })
-        .collect();
-    out.extend(rods);
-    out.extend(arcs);
-    out
+    super::LadderGrid::readings().rungs(robot)
 }

@@ -25,10 +25,10 @@ pub(super) mod tdcr;
 use super::sweep::{loads_at, Direction, DIRECTIONS};
 use super::{ExperimentError, Progress};
 use crate::files::Scene;
-use crate::ladder::{CcSettings, PccSettings, Rung};
+use crate::ladder::Rung;
 use crate::loads::Loads;
 use crate::robot::Robot;
-use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
+use crate::settings::SolverSettings;
 use crate::statics::Start;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -179,47 +179,7 @@ pub struct StabilityMap {
 /// curvature rungs are left out when a tendon is routed continuously
 /// ([`crate::ladder::reject_continuous`]).
 pub fn forward_settings(robot: &Robot) -> Vec<Rung> {
-    let mut v = Vec::new();
-    if crate::ladder::reject_continuous(robot).is_ok() {
-        v.push(Rung::ConstantCurvature(CcSettings::default()));
-        v.push(Rung::PiecewiseConstantCurvature(PccSettings {
-            pieces_per_section: 8,
-            guide_mass: GuideMass::Point,
-            ..PccSettings::default()
-        }));
-    }
-    v.extend(rod_rungs());
-    v
-}
-
-/// The rod rungs both stability maps chart: Kirchhoff and Cosserat (point guide mass)
-/// at RK4 8, RK4 32 and adaptive 1e-8.
-pub(crate) fn rod_rungs() -> impl Iterator<Item = Rung> {
-    [RodModel::Kirchhoff, RodModel::Cosserat]
-        .into_iter()
-        .flat_map(|model| {
-            [
-                Integrator::Rk4 {
-                    steps_per_section: 8,
-                },
-                Integrator::Rk4 {
-                    steps_per_section: 32,
-                },
-                Integrator::Adaptive {
-                    tol: 1e-8,
-                    max_steps: 100_000,
-                },
-            ]
-            .into_iter()
-            .map(move |integrator| {
-                Rung::Rod(SolverSettings {
-                    rod_model: model,
-                    guide_mass: GuideMass::Point,
-                    integrator,
-                    ..SolverSettings::default()
-                })
-            })
-        })
+    crate::ladder::LadderGrid::stability_forward().rungs(robot)
 }
 
 /// The starts mapped for a rung: rod rungs cold, warm and with continuation; the
@@ -321,7 +281,7 @@ pub fn step_count(robot: &Robot, settings: &StabilitySettings) -> usize {
     let per_dir = 1 + forward_settings(robot).len() + estimate::METHODS.len();
     let dirs = map_directions(robot, settings).len();
     let readings = if settings.readings && super::pareto::is_tdcr(robot) {
-        1 + tdcr::readings_settings().len()
+        1 + tdcr::readings_settings(robot).len()
     } else {
         0
     };

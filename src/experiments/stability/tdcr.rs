@@ -9,10 +9,10 @@ use crate::experiments::sweep::Direction;
 use crate::experiments::track::{track_with, tracking_settings};
 use crate::experiments::{ExperimentError, Progress};
 use crate::files::Scene;
-use crate::ladder::{CcSettings, PccSettings, Rung, TendonKinematics};
+use crate::ladder::{Rung, TendonKinematics};
 use crate::loads::Loads;
 use crate::robot::Robot;
-use crate::settings::{GuideMass, SolverSettings};
+use crate::settings::SolverSettings;
 use crate::statics::Start;
 use crate::tendons::Actuation;
 use nalgebra::Vector3;
@@ -39,17 +39,8 @@ pub fn tension_form(scene: &Scene) -> Result<Scene, ExperimentError> {
 
 /// The settings of the readings map: CC and PCC 8 by the kinematics, Kirchhoff and
 /// Cosserat (point guide mass) at RK4 8, RK4 32 and adaptive 1e-8 by the tendon solve.
-pub fn readings_settings() -> Vec<Rung> {
-    let mut v = vec![
-        Rung::ConstantCurvature(CcSettings::default()),
-        Rung::PiecewiseConstantCurvature(PccSettings {
-            pieces_per_section: 8,
-            guide_mass: GuideMass::None,
-            ..PccSettings::default()
-        }),
-    ];
-    v.extend(super::rod_rungs());
-    v
+pub fn readings_settings(robot: &Robot) -> Vec<Rung> {
+    crate::ladder::LadderGrid::stability_readings().rungs(robot)
 }
 
 /// The readings direction of the stability map: at each magnitude `theta` of
@@ -90,7 +81,7 @@ pub fn readings_map(
     .map(|p| p.map(|(t, _)| t))
     .collect();
     progress(Progress::Done);
-    for rung in readings_settings() {
+    for rung in readings_settings(robot) {
         progress(Progress::Step(format!("readings: {}", rung.label())));
         for &start in starts_for(&rung) {
             let rung_here = match (&rung, start) {
