@@ -80,6 +80,7 @@ impl IkWorkspace {
             jacobians: n.jacobians,
             forward_solves: solves,
             qp_solves,
+            qp_fallbacks: n.qp_fallbacks,
             objective: st.objective,
             slack: self.best.taut().iter().filter(|t| !**t).count(),
             first_order: self.first_order,

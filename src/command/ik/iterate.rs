@@ -1,5 +1,6 @@
 //! The trust-region Gauss-Newton iteration and its conclusions.
 
+use super::qp::QpSolver;
 use super::{Counts, IkObjective, IkStatus, IkTarget, IkWorkspace, FIRST_ORDER_TOL, MM};
 
 impl IkWorkspace {
@@ -49,11 +50,12 @@ impl IkWorkspace {
                         break;
                     }
                 }
-                let mut u = std::mem::take(&mut self.u);
-                let ok = self.qp.solve(&mut u);
+                let solver = self.qp.solve(&self.h, &self.g, &mut self.u);
                 n.qp_solves += 1;
-                self.u = u;
-                if !ok {
+                if solver == Some(QpSolver::Clarabel) {
+                    n.qp_fallbacks += 1;
+                }
+                if solver.is_none() {
                     outcome = Some(self.conclude(reached));
                     break;
                 }

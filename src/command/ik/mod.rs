@@ -35,8 +35,11 @@
 //! redundant robot's are), is minimised over `dq` subject to the limits,
 //! `|dq_i| <= Delta` and the linearised tensions staying non-negative
 //! (`T + dT/dq dq >= 0`: the model of the current active set holds only up to where
-//! a taut tendon goes slack), a box-constrained convex QP solved by clarabel (interior point,
-//! built once and updated in place, `update_P/q/b`). The step is taken when the
+//! a taut tendon goes slack), a bounded convex QP solved without allocation by a
+//! primal active-set method on the Cholesky factor of its normal matrix
+//! (`active_set`, Nocedal & Wright algorithm 16.3), with clarabel (interior point,
+//! built once and updated in place) as the fallback when that gives up (counted in
+//! [`IkReport::qp_fallbacks`]) and as the reference of its tests. The step is taken when the
 //! forward solve at `q + dq` converges and the actual decrease of `phi` is at least
 //! 1e-4 of the model's (`rho`), and `Delta` grows (x2, `rho > 0.75` with the step on
 //! the trust region) or shrinks (to a quarter of the step, `rho < 0.25`) as in
@@ -114,6 +117,7 @@
 //! readings are always within the limits, and the workspace stays at the returned
 //! readings (the next call's warm start).
 
+mod active_set;
 mod broyden;
 mod continuation;
 mod iterate;

@@ -55,8 +55,12 @@ pub struct IkReport {
     pub jacobians: usize,
     /// Forward solves (trial steps, friction differences).
     pub forward_solves: usize,
-    /// Bounded least-squares steps solved (clarabel).
+    /// Bounded least-squares steps solved.
     pub qp_solves: usize,
+    /// Of those, the ones the allocation-free active-set method gave up on
+    /// (numerically dependent constraints, cycling) and clarabel solved: these
+    /// allocate (0 on the FTDCR v4's warm ticks, `tests/ik_alloc.rs`).
+    pub qp_fallbacks: usize,
     /// The secondary objective that chose among the solutions.
     pub objective: IkObjective,
     /// Tendons slack at the returned readings.
@@ -74,4 +78,5 @@ pub(super) struct Counts {
     pub(super) jacobians: usize,
     pub(super) solves: usize,
     pub(super) qp_solves: usize,
+    pub(super) qp_fallbacks: usize,
 }

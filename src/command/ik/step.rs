@@ -101,15 +101,6 @@ impl IkWorkspace {
                 }
             }
         }
-        // upper triangle, column by column
-        let mut n = 0;
-        for col in 0..p {
-            for row in 0..=col {
-                self.qp.p_vals[n] = self.h[row * p + col];
-                n += 1;
-            }
-        }
-        self.qp.q_vals.copy_from_slice(&self.g);
         for i in 0..p {
             // from the linearisation point; a slack tendon's step only pulls beyond
             // its engagement point (its reading is kept when the step is 0)
@@ -119,14 +110,14 @@ impl IkWorkspace {
             } else {
                 (self.limits.min_m[i] - self.q_lin[i]).max(-delta)
             };
-            self.qp.b_vals[i] = (hi * MM).max(0.0);
-            self.qp.b_vals[p + i] = (-lo * MM).max(0.0);
+            self.qp.hi[i] = (hi * MM).max(0.0);
+            self.qp.lo[i] = (lo * MM).min(0.0);
             // the linearised tension of each tendon stays >= 0: the model of the
             // active set holds only up to where a taut tendon goes slack
-            self.qp.b_vals[2 * p + i] = self.t[i].max(0.0);
-            let col = i * (p + 2);
-            for k in 0..p {
-                self.qp.a_vals[col + 2 + k] = -self.jt[k * p + i] / MM;
+            self.qp.rhs[i] = self.t[i].max(0.0);
+            let row = &mut self.qp.rows[i * p..(i + 1) * p];
+            for (a, j) in row.iter_mut().zip(&self.jt[i * p..(i + 1) * p]) {
+                *a = -j / MM;
             }
         }
     }
