@@ -111,9 +111,8 @@ impl IkWorkspace {
                     self.jac_valid = updated && rho > 0.75;
                     self.jac_exact = false;
                     if updated {
-                        // same active set: the readings, or the slack tendons'
-                        // engagement points at the new shape
-                        self.set_linearisation_point();
+                        // all taut: the linearisation point is the readings
+                        self.q_lin.copy_from_slice(&self.q);
                     }
                     let gain = phi - phi_new;
                     phi = phi_new;

@@ -22,11 +22,15 @@ impl IkWorkspace {
         ok.then_some(0)
     }
 
-    /// The linearisation point `q_lin` at the accepted state: the reading of a
-    /// taut tendon; for a slack one its engagement point, the reading at which its
-    /// free length equals its path length (`T = 0` on the taut branch).
-    pub(super) fn set_linearisation_point(&mut self) {
-        for i in 0..self.p {
+    pub(super) fn exact_jacobian(&mut self) -> bool {
+        let p = self.p;
+        self.x_acc
+            .copy_from_slice(self.tw.workspace().unknowns_vector());
+        self.taut_cur.copy_from_slice(self.best.taut());
+        // engagement points of the slack tendons: the reading at which the free
+        // length equals the path length (T = 0 on the taut branch)
+        for i in 0..p {
+            self.slack[i] = !self.taut_cur[i];
             self.q_lin[i] = self.q[i];
             if self.slack[i] {
                 let l = self.best.lengths()[self.best.driven()[i]];
@@ -35,17 +39,6 @@ impl IkWorkspace {
                 self.q_lin[i] = self.q[i] + (free - l).max(0.0);
             }
         }
-    }
-
-    pub(super) fn exact_jacobian(&mut self) -> bool {
-        let p = self.p;
-        self.x_acc
-            .copy_from_slice(self.tw.workspace().unknowns_vector());
-        self.taut_cur.copy_from_slice(self.best.taut());
-        for i in 0..p {
-            self.slack[i] = !self.taut_cur[i];
-        }
-        self.set_linearisation_point();
         // the dual sweep at the converged point
         {
             let np = self.ts.len();

@@ -87,9 +87,8 @@
 //! depends on the direction memory, not on `z` alone: the Jacobian is then a central
 //! difference of converged forward solves (`2p` solves).
 //!
-//! **Jacobian updates.** After an accepted step that keeps the active set (every
-//! tendon taut before and after, or slack before and after with its reading kept;
-//! no friction), the Jacobians are not evaluated again: Broyden's
+//! **Jacobian updates.** After an accepted step with every tendon taut before and
+//! after (and no friction), the Jacobians are not evaluated again: Broyden's
 //! rank-one update along the step (Broyden, "A class of methods for solving
 //! nonlinear simultaneous equations", Math. Comp. 19, 1965; Nocedal & Wright eq.
 //! 11.24) carries them to the new readings, and into the next call (the next
