@@ -48,7 +48,11 @@ impl IkWorkspace {
                     break;
                 }
             }
-            if self.merit(target, &self.tip, &self.axis, &self.q, &self.t) >= phi_first {
+            // the continuation's end is kept when it reached, or when it is closer
+            // by more than 1e-4 of phi (the stall threshold): an end as far as the
+            // first attempt's does not replace that attempt's conclusion
+            let phi_cont = self.merit(target, &self.tip, &self.axis, &self.q, &self.t);
+            if !self.is_reached(target) && phi_cont >= (1.0 - 1e-4) * phi_first {
                 self.tw.warm_copy_from(&self.end_ws);
                 self.q.copy_from_slice(&self.q_end);
                 self.accept_state();

@@ -67,8 +67,10 @@
 //! solves [`CONTINUATION_STEPS`] intermediate targets on the segment from the start
 //! tip to the target, each warm from the last (a homotopy in the target; Allgower &
 //! Georg, *Numerical Continuation Methods*, 1990, ch. 1), within the same budget;
-//! its end is kept when it is closer (lower `phi`) than the first attempt's (a
-//! creeping first attempt then goes on with the budget left). On that case it
+//! its end is kept when it reaches, or is closer than the first attempt's by more
+//! than 1e-4 of `phi` (an end as far as the first attempt's, e.g. a target far
+//! outside, does not replace that attempt's `Unreachable` with the continuation's
+//! `BudgetExhausted`; a creeping first attempt then goes on with the budget left). On that case it
 //! reaches; the control loop's small steps rarely need it.
 //!
 //! **Jacobian.** At a converged solve, `F(z; q) = 0` with `z = [x; T]` (scaled
