@@ -1,6 +1,7 @@
 //! Warm inverse-kinematics ticks on the calibrated FTDCR v4: the targets are the
 //! model's tips at consecutive val rows, each tick warm from the previous tick's
-//! readings (what `benches/ik.rs` times). Prints per-call time percentiles and
+//! readings, the rows walked forward then backward as `benches/ik.rs` walks them
+//! (PASSES walks; the first tick, from zero readings, is not counted). Prints per-call time percentiles and
 //! what a tick costs (iterations = Jacobians, forward solves, QP solves), and the
 //! slowest calls with their status.
 //!
@@ -31,8 +32,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut times, mut its, mut jacs, mut fs, mut qps) = (Vec::new(), 0, 0, 0, 0);
     let mut slow = Vec::new();
     let mut statuses = std::collections::BTreeMap::new();
+    let n = targets.len();
     for pass in 0..passes {
-        for (k, t) in targets.iter().enumerate() {
+        for j in 0..n - 1 {
+            let k = if pass % 2 == 0 { j } else { n - 1 - j };
+            let t = &targets[k];
             let t0 = Instant::now();
             let r = ik.solve(t)?;
             let dt = t0.elapsed().as_secs_f64() * 1e3;

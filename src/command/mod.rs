@@ -3,7 +3,7 @@
 //!
 //! The forward model is the readings solve of [`crate::tendons::TendonWorkspace`];
 //! [`IkWorkspace`] inverts it by a trust-region Gauss-Newton iteration whose steps
-//! are bounded least-squares problems (clarabel), with the exact Jacobian of the
+//! are bounded least-squares problems (an active-set QP, clarabel as the fallback), with the exact Jacobian of the
 //! tip with respect to the readings (implicit function theorem, [`ik`] module docs),
 //! warm-started from the previous tick and bounded by a per-call budget.
 //! [`workspace`] samples the actuator box for the reachable tips, their convex hull

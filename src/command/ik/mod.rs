@@ -1,0 +1,396 @@
+//! Inverse kinematics from actuator readings: the readings `q` (m, one per
+//! displacement-driven tendon) that put the tip at a target position (optionally
+//! pointing along a target direction), inside the actuator limits.
+//!
+//! **Problem.** With `p(q)` the tip and `a(q)` the tip axis of the readings solve
+//! (`crate::tendons`), minimise
+//!
+//! ```text
+//! phi(q) = |p* - p(q)|^2 + l_d^2 |a* - a(q)|^2 + S(q)      s.t.  q_min <= q <= q_max
+//! ```
+//!
+//! (`l_d` = [`IkSettings::direction_weight_m`], 0 without a direction target; `S` the
+//! secondary objective below). Nine tendons for a 3-D target leave a redundancy of
+//! six: `S` picks one solution, with a small user weight `w`
+//! ([`IkSettings::secondary_weight`]) so that the position term dominates (a weight
+//! `w` shifts the reached tip by about `w` times the secondary's gradient over the
+//! Jacobian's singular values squared; the default 1e-6 keeps it well inside the
+//! tolerance on the FTDCR v4, where 1e-4 left some val targets out of reach):
+//!
+//! * [`IkObjective::Closest`]: `w |q - q_prev|^2`, readings closest to those the call
+//!   started from (the previous tick): smooth servo motion;
+//! * [`IkObjective::LeastPull`]: `w l_r sum_i q_i` (`l_r` = 1 mm), least total pull;
+//!   readings go to their lower limits where the target allows (tendons go slack);
+//! * [`IkObjective::LeastTension`]: `w l_r^2 sum_i (T_i / 1 N)^2`, the sum of squared
+//!   tensions: a smooth proxy of the peak tension (the 2-norm bounds the max-norm,
+//!   `max T <= |T|_2`), with `dT/dq` from the same implicit-function solve as the
+//!   tip's Jacobian.
+//!
+//! **Step.** Trust-region Gauss-Newton (Nocedal & Wright, *Numerical Optimization*,
+//! 2nd ed., ch. 4 and 10.3): at the current readings the linearised `phi` plus a
+//! Levenberg-Marquardt damping `mu |dq|^2` (mm^2), `mu = 1e-6 + 0.1 |r|^2` with `r`
+//! the position (and direction) residual in mm (Yamashita & Fukushima, "On the rate
+//! of convergence of the Levenberg-Marquardt method", Computing Suppl. 15, 2001:
+//! `mu ~ |r|^2` keeps quadratic convergence, also to a non-isolated solution, as a
+//! redundant robot's are), is minimised over `dq` subject to the limits,
+//! `|dq_i| <= Delta` and the linearised tensions staying non-negative
+//! (`T + dT/dq dq >= 0`: the model of the current active set holds only up to where
+//! a taut tendon goes slack), a bounded convex QP solved without allocation by a
+//! primal active-set method on the Cholesky factor of its normal matrix
+//! (`active_set`, Nocedal & Wright algorithm 16.3), with clarabel (interior point,
+//! built once and updated in place) as the fallback when that gives up (counted in
+//! [`IkReport::qp_fallbacks`]) and as the reference of its tests. The step is taken when the
+//! forward solve at `q + dq` converges and the actual decrease of `phi` is at least
+//! 1e-4 of the model's (`rho`), and `Delta` grows (x2, `rho > 0.75` with the step on
+//! the trust region) or shrinks (to a quarter of the step, `rho < 0.25`) as in
+//! Nocedal & Wright algorithm 4.1. The QP works in millimetres (readings and tip)
+//! so that its tolerances are meaningful.
+//!
+//! The damping keeps a step out of the Jacobian's near-null directions while the
+//! residual is large. Without it (the fixed `1e-6` alone), a step whose residual
+//! is mostly curvature (the tip's drop as the robot bends) is explained by such a
+//! direction: on the daru robot, pulling all three cables together moves the tip
+//! 0.09 mm per mm against 5-7 mm per mm for bending, and an undamped first step
+//! pulled all three by 1.45 mm (tensions 10 -> 17 N), to a tip 0.07 mm from the
+//! target where the tip's derivative along that direction changes sign within
+//! 1e-6 m of reading (differences of converged solves at 1e-5, 1e-6, 1e-7 m:
+//! dx/dq_1 = 4.8, 3.4, 110). There no trial step was accepted, the trust region
+//! shrank to nothing, and the target was called unreachable.
+//!
+//! **Continuation.** A gradient method finds a local minimum of `phi`, and the
+//! readings model has some that are not the target: on the daru robot at high
+//! common-mode tension (about 20 N per cable) a start 0.8 mm of one reading away
+//! from a reachable target's readings ends, from the first step on, in a valley
+//! whose floor lies 10.2 um from the target, stationary to 1e-4 (forward solves to
+//! 1e-11 m), with the readings 0.2 mm from the target's. When the first attempt does
+//! not reach and budget is left, the call starts over from its start readings and
+//! solves [`CONTINUATION_STEPS`] intermediate targets on the segment from the start
+//! tip to the target, each warm from the last (a homotopy in the target; Allgower &
+//! Georg, *Numerical Continuation Methods*, 1990, ch. 1), within the same budget;
+//! its end is kept when it reaches, or is closer than the first attempt's by more
+//! than 1e-4 of `phi` (an end as far as the first attempt's, e.g. a target far
+//! outside, does not replace that attempt's `Unreachable` with the continuation's
+//! `BudgetExhausted`; a creeping first attempt then goes on with the budget left). On that case it
+//! reaches; the control loop's small steps rarely need it.
+//!
+//! **Jacobian.** At a converged solve, `F(z; q) = 0` with `z = [x; T]` (scaled
+//! shooting unknowns, tensions): by the implicit function theorem
+//! `dz/dq_i = F_z^-1 e_{n+i} (1 + T_i/EA_t)` for a taut tendon (`crate::tendons::ift`,
+//! shared with the calibration's sensitivities, `calibrate::readings_sens`). A slack
+//! tendon's reading moves nothing until its slack is taken up: its column is the
+//! one-sided derivative beyond its engagement point (the reading at which its free
+//! length equals its path length, where it is taut at `T = 0`; `F_z` factored again
+//! with that tendon taut), and the step for it is a pull beyond that point or none
+//! (the reading is then kept, or paid out to its lower limit under `least_pull`). `F_z` is exact, from one dual
+//! sweep (`Workspace::joint_jacobians`); the tip's derivative along each tangent is a
+//! central difference of the tip at fixed `(z +- h dz/dq_i)` (two `f64` passes, a smooth
+//! function: truncation `h^2`, no solver tolerance in it), as the calibration does.
+//! `dT/dq` are the tension rows of `dz/dq`. With capstan friction (`mu > 0`) the state
+//! depends on the direction memory, not on `z` alone: the Jacobian is then a central
+//! difference of converged forward solves (`2p` solves).
+//!
+//! **Jacobian updates.** After an accepted step with every tendon taut before and
+//! after (and no friction), the Jacobians are not evaluated again: Broyden's
+//! rank-one update along the step (Broyden, "A class of methods for solving
+//! nonlinear simultaneous equations", Math. Comp. 19, 1965; Nocedal & Wright eq.
+//! 11.24) carries them to the new readings, and into the next call (the next
+//! tick starts where this one ended), as long as the model predicted the step well
+//! (`rho > 0.75`). The exact Jacobian is evaluated again after a poorer step, when
+//! a step from an updated one is rejected (same trust radius), when the active set
+//! changes, and before any conclusion other than `Reached` (a stationary point is
+//! judged on the exact Jacobian only). [`IkReport::jacobians`] counts the
+//! evaluations. On the FTDCR v4's warm ticks an evaluation (dual sweep, `F_z`
+//! factored, 18 tangent passes) costs about 3.4 forward solves.
+//!
+//! **Outcomes** ([`IkStatus`]): `Reached` (tip within [`IkSettings::tolerance_m`], and
+//! the direction within [`IkSettings::angle_tolerance_rad`] when one is given);
+//! `Unreachable` only at a constrained stationary point with the tip still farther
+//! than the tolerance: the first-order condition of the bounded least squares
+//! (Nocedal & Wright eq. 12.34, with the limits as the only constraints) holds to
+//! 1e-2, i.e. the gradient `g = -2 J^T r` projected on the directions the limits
+//! allow (a reading on its lower limit or a slack tendon only pulls, one on its
+//! upper limit only pays out) is below 1e-2 of `2 |J|_F |r|` ([`IkReport::first_order`]),
+//! and the iteration has stopped there (no step, steps below
+//! [`IkSettings::step_tolerance_m`], or two steps in a row improving `phi` by less
+//! than 1e-4 of itself): the closest tip found and its distance are returned.
+//! `BudgetExhausted` when the iterations or forward solves of [`IkSettings`] run out
+//! first, or when the iteration stops at a point that is not stationary (the best
+//! readings found are kept). The
+//! readings are always within the limits, and the workspace stays at the returned
+//! readings (the next call's warm start).
+
+mod active_set;
+mod broyden;
+mod continuation;
+mod iterate;
+mod jacobian;
+mod qp;
+mod report;
+mod settings;
+mod step;
+
+pub use report::{IkReport, IkStatus};
+pub use settings::{IkObjective, IkSettings, IkTarget};
+
+use crate::error::ModelError;
+use crate::math::warm::WarmCopy;
+use crate::math::DenseLu;
+use crate::robot::ActuatorLimits;
+use crate::scene::Scene;
+use crate::statics::Start;
+use crate::tendons::TendonWorkspace;
+use nalgebra::Vector3;
+use qp::StepQp;
+use report::Counts;
+
+/// Millimetres per metre: the QP's units.
+const MM: f64 = 1e3;
+/// Reading step of the tangent differences (m).
+const TANGENT_STEP_M: f64 = 1e-6;
+/// Reading step of the friction fallback's differences of solves (m).
+const FD_STEP_M: f64 = 1e-5;
+/// Damping of the step in the QP (per mm^2 of step).
+const DAMPING: f64 = 1e-6;
+/// Levenberg-Marquardt factor `c` of the damping `mu = c |r|^2` (`r` the
+/// position and direction residual in mm; module docs).
+const LM_FACTOR: f64 = 0.1;
+/// First-order tolerance: a point whose projected gradient of `phi` is below this
+/// fraction of `2 |J| |r|` is a constrained stationary point (module docs).
+const FIRST_ORDER_TOL: f64 = 1e-2;
+/// Intermediate targets of the continuation after a first attempt that did not
+/// reach (module docs).
+const CONTINUATION_STEPS: usize = 4;
+/// A reading within this of a limit is on it (m).
+const ON_BOUND_M: f64 = 1e-12;
+/// Inverse kinematics on a readings model: allocate once, solve every tick.
+pub struct IkWorkspace {
+    /// The forward model, at the accepted readings between calls.
+    tw: TendonWorkspace,
+    /// The state at the accepted readings during a call (to return to after a
+    /// rejected trial step).
+    best: Box<TendonWorkspace>,
+    /// The state at the call's start and at the end of its first attempt (the
+    /// continuation starts from the one and falls back to the other).
+    start_ws: Box<TendonWorkspace>,
+    end_ws: Box<TendonWorkspace>,
+    q_end: Vec<f64>,
+    limits: ActuatorLimits,
+    settings: IkSettings,
+    /// Largest reading that leaves a tendon 1 % of its rest free length (m).
+    q_phys: Vec<f64>,
+    p: usize,
+    nx: usize,
+    /// Accepted readings, the call's start, the trial.
+    q: Vec<f64>,
+    q0: Vec<f64>,
+    q_trial: Vec<f64>,
+    /// Tip, axis and tensions at the accepted readings.
+    tip: Vector3<f64>,
+    axis: Vector3<f64>,
+    t: Vec<f64>,
+    // Jacobian buffers
+    jac_s: Vec<f64>,
+    jac_m: Vec<f64>,
+    lu: DenseLu,
+    col: Vec<f64>,
+    xs: Vec<f64>,
+    ts: Vec<f64>,
+    x_acc: Vec<f64>,
+    /// Taut flags at the accepted readings, and the active set of one column.
+    taut_cur: Vec<bool>,
+    taut_tmp: Vec<bool>,
+    /// Slack at the accepted readings, and the linearisation point: the reading
+    /// itself for a taut tendon, the reading that just takes up the slack (its
+    /// engagement point) for a slack one.
+    slack: Vec<bool>,
+    q_lin: Vec<f64>,
+    /// `dp/dq`, `da/dq` (3 x p, row-major) and `dT/dq` (p x p).
+    jp: Vec<f64>,
+    ja: Vec<f64>,
+    jt: Vec<f64>,
+    /// QP: full `P` (p x p), its gradient and the step (mm).
+    h: Vec<f64>,
+    g: Vec<f64>,
+    u: Vec<f64>,
+    qp: StepQp,
+    has_state: bool,
+    /// First-order measure at the last `build_qp` (see [`IkReport::first_order`]).
+    first_order: f64,
+    /// `jp`, `ja`, `jt`, `slack`, `q_lin` hold at the accepted readings, and were
+    /// evaluated there (not updated along a step).
+    jac_valid: bool,
+    jac_exact: bool,
+    /// The last accepted step (m), for the Broyden update.
+    step_m: Vec<f64>,
+}
+
+impl IkWorkspace {
+    /// An inverse solver on a readings model with actuator limits (m, in
+    /// `tw.driven()` order). The rollback of `tw` is turned off (this workspace
+    /// keeps its own accepted state); starts at zero readings (the reference).
+    pub fn new(
+        tw: TendonWorkspace,
+        limits: ActuatorLimits,
+        settings: IkSettings,
+    ) -> Result<Self, ModelError> {
+        settings.validate()?;
+        limits.validate(tw.columns())?;
+        let tw = tw.without_rollback();
+        let p = tw.driven().len();
+        let nx = tw.workspace().unknowns();
+        let np = tw.workspace().params().len();
+        let nc = tw.workspace().robot().cables().len();
+        let w = nx + np;
+        let m = nx + p;
+        let q_phys = tw
+            .rest_free_lengths()
+            .iter()
+            .zip(tw.mechanics())
+            .map(|(l0, mech)| 0.99 * l0 + mech.zero_offset_m)
+            .collect();
+        let best = Box::new(tw.clone());
+        let mut me = Self {
+            start_ws: best.clone(),
+            end_ws: best.clone(),
+            q_end: vec![0.0; p],
+            best,
+            limits,
+            settings,
+            q_phys,
+            p,
+            nx,
+            q: vec![0.0; p],
+            q0: vec![0.0; p],
+            q_trial: vec![0.0; p],
+            tip: Vector3::zeros(),
+            axis: Vector3::z(),
+            t: vec![0.0; p],
+            jac_s: vec![0.0; nx * w],
+            jac_m: vec![0.0; nc * w],
+            lu: DenseLu::new(m),
+            col: vec![0.0; m],
+            xs: vec![0.0; nx],
+            ts: vec![0.0; np],
+            x_acc: vec![0.0; nx],
+            taut_cur: vec![true; p],
+            taut_tmp: vec![true; p],
+            slack: vec![false; p],
+            q_lin: vec![0.0; p],
+            jp: vec![0.0; 3 * p],
+            ja: vec![0.0; 3 * p],
+            jt: vec![0.0; p * p],
+            h: vec![0.0; p * p],
+            g: vec![0.0; p],
+            u: vec![0.0; p],
+            qp: StepQp::new(p)?,
+            has_state: false,
+            first_order: f64::NAN,
+            jac_valid: false,
+            jac_exact: false,
+            step_m: vec![0.0; p],
+            tw,
+        };
+        let zero = vec![0.0; p];
+        me.set_readings(&zero)?;
+        Ok(me)
+    }
+
+    /// From a scene: its readings model, `[robot.limits]` (unbounded without) and
+    /// `settings`.
+    pub fn from_scene(scene: &Scene, settings: IkSettings) -> Result<Self, ModelError> {
+        Self::new(
+            scene.tendon_workspace()?,
+            scene.actuator_limits()?,
+            settings,
+        )
+    }
+
+    /// Move to readings `q` (m, within the limits): a forward solve, warm (then cold
+    /// if that fails). The next [`IkWorkspace::solve`] starts there.
+    pub fn set_readings(&mut self, q: &[f64]) -> Result<(), ModelError> {
+        if q.len() != self.p {
+            return Err(ModelError::Invalid {
+                field: "readings".into(),
+                why: format!("{} readings for {} driven tendons", q.len(), self.p),
+            });
+        }
+        for (i, &v) in q.iter().enumerate() {
+            let (lo, hi) = (self.limits.min_m[i], self.limits.max_m[i]);
+            if v.is_nan() || v < lo || v > hi {
+                return Err(ModelError::OutOfRange {
+                    field: format!("readings[{i}] ({})", self.tw.columns()[i]),
+                    value: v,
+                    why: format!("outside the actuator limits [{lo}, {hi}] m"),
+                });
+            }
+        }
+        let mut r = self.tw.solve_readings(q)?;
+        if !r.status.is_converged() {
+            r = self.tw.solve_readings_from(q, Start::Cold)?;
+        }
+        if !r.status.is_converged() {
+            self.has_state = false;
+            return Err(ModelError::Invalid {
+                field: "readings".into(),
+                why: format!("the forward solve at the start readings did not converge ({r:?})"),
+            });
+        }
+        self.q.copy_from_slice(q);
+        self.accept_state();
+        self.has_state = true;
+        self.jac_valid = false;
+        Ok(())
+    }
+
+    /// Readings of the last solve (m, `driven` order).
+    pub fn readings(&self) -> &[f64] {
+        &self.q
+    }
+    /// Tip at [`IkWorkspace::readings`] (m).
+    pub fn tip_position(&self) -> Vector3<f64> {
+        self.tip
+    }
+    /// Tip axis at [`IkWorkspace::readings`] (unit).
+    pub fn tip_axis(&self) -> Vector3<f64> {
+        self.axis
+    }
+    /// The forward model, at [`IkWorkspace::readings`].
+    pub fn tendon_workspace(&self) -> &TendonWorkspace {
+        &self.tw
+    }
+    /// The actuator limits (m).
+    pub fn limits(&self) -> &ActuatorLimits {
+        &self.limits
+    }
+    /// The settings in effect.
+    pub fn settings(&self) -> &IkSettings {
+        &self.settings
+    }
+    /// Replace the settings (checked; the ones in effect stay on error).
+    pub fn set_settings(&mut self, s: IkSettings) -> Result<(), ModelError> {
+        s.validate()?;
+        self.settings = s;
+        Ok(())
+    }
+    /// `dp/dq` at the readings of the last Jacobian (3 x p row-major, m/m).
+    pub fn tip_jacobian(&self) -> &[f64] {
+        &self.jp
+    }
+    /// `dT/dq` at the readings of the last Jacobian (p x p row-major, N/m).
+    pub fn tension_jacobian(&self) -> &[f64] {
+        &self.jt
+    }
+
+    /// The tendon workspace's converged state becomes the accepted one.
+    fn accept_state(&mut self) {
+        WarmCopy::warm_copy_from(&mut *self.best, &self.tw);
+        self.tip = self.tw.tip_position();
+        self.axis = self.tw.workspace().tip_axis();
+        self.t.copy_from_slice(self.tw.tensions());
+    }
+
+    /// Back to the accepted state (after a rejected trial or the Jacobian's passes).
+    fn restore_state(&mut self) {
+        self.tw.warm_copy_from(&self.best);
+    }
+}
