@@ -306,8 +306,7 @@ fn ik_warm_calls_allocate_no_more_than_the_library() {
     eprintln!(
         "40 warm cs_tendons_ik calls: {abi} allocations (library {library}), {qps} QP solves"
     );
-    assert!(
-        abi <= qps * 8 + 10,
-        "{abi} allocations in 40 warm calls with {qps} QPs"
-    );
+    // the library's warm IK step QP is allocation-free (its own active-set method;
+    // clarabel only as a counted fallback): none through the C layer either
+    assert_eq!(abi, 0, "{abi} allocations in 40 warm calls with {qps} QPs");
 }

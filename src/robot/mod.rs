@@ -379,12 +379,6 @@ impl Robot {
         FrictionLaw::of(self.spec.friction.as_ref())
     }
 
-    /// Capstan friction coefficient (0 when frictionless): [`Robot::friction`]'s
-    /// [`FrictionLaw::mu`].
-    pub fn friction_mu(&self) -> f64 {
-        self.friction().mu()
-    }
-
     /// The description this robot was built from.
     pub fn spec(&self) -> &RobotSpec {
         &self.spec

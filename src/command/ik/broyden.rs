@@ -1,17 +1,18 @@
 //! Broyden's rank-one update of the Jacobians along an accepted step.
 
 use super::IkWorkspace;
+use crate::math::broyden::secant_row_update;
 
 impl IkWorkspace {
     /// Broyden's rank-one update of `jp`, `ja`, `jt` along the accepted step
     /// `s = q_trial - q` with the tip, axis and tension changes `y` it made
-    /// (`J += (y - J s) s^T / s^T s`; Broyden, Math. Comp. 19, 1965; Nocedal &
-    /// Wright eq. 11.24): the Jacobian at the new readings without evaluating it.
+    /// (`J += (y - J s) s^T / s^T s`, [`secant_row_update`]; Broyden, Math. Comp.
+    /// 19, 1965; Nocedal & Wright eq. 11.24): the Jacobian at the new readings without evaluating it.
     /// Only with every tendon taut before and after (the active set, and so the
     /// columns' meaning, unchanged) and without friction; `false` otherwise.
     pub(super) fn broyden_update(&mut self) -> bool {
         let p = self.p;
-        if self.tw.workspace().robot().friction_mu() > 0.0
+        if !self.tw.workspace().robot().friction().is_frictionless()
             || self.slack.iter().any(|s| *s)
             || self.tw.taut().iter().any(|t| !*t)
         {
@@ -28,13 +29,7 @@ impl IkWorkspace {
         let s = &self.step_m;
         let dp = self.tw.tip_position() - self.tip;
         let da = self.tw.workspace().tip_axis() - self.axis;
-        let update = |row: &mut [f64], y: f64| {
-            let js: f64 = row.iter().zip(s).map(|(j, v)| j * v).sum();
-            let c = (y - js) / ss;
-            for (j, v) in row.iter_mut().zip(s) {
-                *j += c * v;
-            }
-        };
+        let update = |row: &mut [f64], y: f64| secant_row_update(row, s, ss, y);
         for r in 0..3 {
             update(&mut self.jp[r * p..(r + 1) * p], dp[r]);
             update(&mut self.ja[r * p..(r + 1) * p], da[r]);

@@ -13,7 +13,7 @@ impl IkWorkspace {
         if !self.has_state {
             return None;
         }
-        let ok = if self.tw.workspace().robot().friction_mu() > 0.0 {
+        let ok = if !self.tw.workspace().robot().friction().is_frictionless() {
             return self.fd_jacobian();
         } else {
             self.exact_jacobian()
