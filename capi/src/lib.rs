@@ -338,6 +338,16 @@ fn bad(msg: impl Into<String>) -> (CsCode, String) {
     (CsCode::BadArgument, msg.into())
 }
 
+/// A caller's buffer of `n` readings against the `p` displacement-driven tendons.
+fn reading_count(n: usize, p: usize) -> Result<(), (CsCode, String)> {
+    if n != p {
+        return Err(bad(format!(
+            "n = {n} readings for {p} displacement-driven tendons"
+        )));
+    }
+    Ok(())
+}
+
 fn scene_from(text: *const c_char) -> Result<Scene, (CsCode, String)> {
     if text.is_null() {
         return Err(bad("scene text is null"));
@@ -958,12 +968,7 @@ pub unsafe extern "C" fn cs_tendons_solve(
     guard(|| {
         // SAFETY: live handle or null.
         let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
-        let p = h.readings.len();
-        if n != p {
-            return Err(bad(format!(
-                "n = {n} readings for {p} displacement-driven tendons"
-            )));
-        }
+        reading_count(n, h.readings.len())?;
         if readings.is_null() {
             return Err(bad("readings is null"));
         }
@@ -1235,12 +1240,7 @@ pub unsafe extern "C" fn cs_tendons_ik_start(
     guard(|| {
         // SAFETY: live handle or null.
         let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
-        let p = h.readings.len();
-        if n != p {
-            return Err(bad(format!(
-                "n = {n} readings for {p} displacement-driven tendons"
-            )));
-        }
+        reading_count(n, h.readings.len())?;
         if readings.is_null() {
             return Err(bad("readings is null"));
         }
@@ -1322,12 +1322,7 @@ pub unsafe extern "C" fn cs_tendons_ik(
     guard(|| {
         // SAFETY: live handle or null.
         let h = unsafe { t.as_mut() }.ok_or_else(|| bad("tendons is null"))?;
-        let p = h.readings.len();
-        if n != p {
-            return Err(bad(format!(
-                "n = {n} readings for {p} displacement-driven tendons"
-            )));
-        }
+        reading_count(n, h.readings.len())?;
         if target.is_null() {
             return Err(bad("target is null"));
         }
