@@ -10,12 +10,16 @@
 //!
 //! `CASE` is a bench id (`bench_counts list` prints them):
 //!
-//! * `forward_warm/average/rk4_24`, `forward_cold_tensioned/two_section_rk4_24`,
+//! * `forward_warm/{average,point,accurate}/rk4_24`,
+//!   `forward_cold_tensioned/two_section_rk4_24`,
 //!   `forward_cold_tensioned/demo_two_section_scene` (`benches/forward.rs`);
 //! * `estimate_tick_warm/lm`, `estimate_tick_warm/gn`,
 //!   `estimate_tick_warm/constrained_qp` (`benches/estimate.rs`);
 //! * `continuous/till_warm_ramp`, `continuous/till_disks_100_warm_ramp`
-//!   (`benches/continuous.rs`).
+//!   (`benches/continuous.rs`);
+//! * `tendons/tendon_readings_warm`, `tendons/tendon_track_row`,
+//!   `tendons/tendon_control_tick_1khz` (`benches/tendons.rs`: the FTDCR v4 val rows,
+//!   443 rows a cycle; the tick case walks the recording at 1 kHz).
 //!
 //! Each case builds its inputs exactly as its bench does (same robots, loads, scenes,
 //! settings and set-up solves, all before the loop) and then runs the bench's timed
@@ -51,8 +55,10 @@ use cablesense::{
 use std::hint::black_box;
 use std::process::ExitCode;
 
-const CASES: [&str; 8] = [
+const CASES: [&str; 13] = [
     "forward_warm/average/rk4_24",
+    "forward_warm/point/rk4_24",
+    "forward_warm/accurate/rk4_24",
     "forward_cold_tensioned/two_section_rk4_24",
     "forward_cold_tensioned/demo_two_section_scene",
     "estimate_tick_warm/lm",
@@ -60,6 +66,9 @@ const CASES: [&str; 8] = [
     "estimate_tick_warm/constrained_qp",
     "continuous/till_warm_ramp",
     "continuous/till_disks_100_warm_ramp",
+    "tendons/tendon_readings_warm",
+    "tendons/tendon_track_row",
+    "tendons/tendon_control_tick_1khz",
 ];
 
 /// What a case hands back: the checksum, the final tip and the failed count.
@@ -85,7 +94,9 @@ fn main() -> ExitCode {
         }
     };
     let outcome = match case {
-        "forward_warm/average/rk4_24" => Ok(forward_warm(iters)),
+        "forward_warm/average/rk4_24" => Ok(forward_warm(iters, GuideMass::Average)),
+        "forward_warm/point/rk4_24" => Ok(forward_warm(iters, GuideMass::Point)),
+        "forward_warm/accurate/rk4_24" => Ok(forward_warm(iters, GuideMass::Accurate)),
         "forward_cold_tensioned/two_section_rk4_24" => Ok(forward_cold(
             iters,
             two_section_robot(),
@@ -104,6 +115,9 @@ fn main() -> ExitCode {
         "estimate_tick_warm/constrained_qp" => Ok(tick_warm(iters, Method::Constrained)),
         "continuous/till_warm_ramp" => till_warm_ramp(iters),
         "continuous/till_disks_100_warm_ramp" => till_disks_warm_ramp(iters),
+        "tendons/tendon_readings_warm" => tendon_rows(iters, TendonCase::Warm),
+        "tendons/tendon_track_row" => tendon_rows(iters, TendonCase::Track),
+        "tendons/tendon_control_tick_1khz" => tendon_rows(iters, TendonCase::Tick),
         _ => Err(format!(
             "unknown case {case:?} (bench_counts list: the cases)"
         )),
@@ -242,13 +256,13 @@ fn tensioned_loads() -> Loads {
 }
 
 /// `forward_warm/average/rk4_24`: `warm_workspace` + `bench_warm`'s closure.
-fn forward_warm(iters: u64) -> Outcome {
+fn forward_warm(iters: u64, guide_mass: GuideMass) -> Outcome {
     let robot = single_section_robot();
     let s = SolverSettings {
         integrator: Integrator::Rk4 {
             steps_per_section: 24,
         },
-        guide_mass: GuideMass::Average,
+        guide_mass,
         rod_model: RodModel::Cosserat,
         ..Default::default()
     };
@@ -486,4 +500,85 @@ fn till_with_disks(n: usize) -> Robot {
         friction: None,
     })
     .expect("robot")
+}
+
+// ---------------------------------------------------------------- benches/tendons.rs
+
+/// The timed closure of a tendon bench.
+#[derive(Clone, Copy)]
+enum TendonCase {
+    /// `tendon_readings_warm`: one warm row.
+    Warm,
+    /// `tendon_track_row`: one warm row and its JSON record.
+    Track,
+    /// `tendon_control_tick_1khz`: one tick of readings interpolated at 1 kHz.
+    Tick,
+}
+
+/// The FTDCR v4 val rows on the shipped scene, each case's closure `iters` times from
+/// the bench's state at its first timed call (a fresh workspace, row 0, tick 0). The
+/// rows are read line by line as at `c1f105d` (the same rows as `good_rows`).
+fn tendon_rows(iters: u64, case: TendonCase) -> Result<Outcome, String> {
+    let scene = load_scene("ftdcr_v4.toml")?;
+    let mut ws = scene.tendon_workspace().map_err(|e| e.to_string())?;
+    let path = format!(
+        "{}/data/hardware/ftdcr_v4/val.csv",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{path}: {e}"))?;
+    let mut p = scene.readings_parser(&ws);
+    let rows: Vec<_> = text
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| p.line(i + 1, l).ok().flatten())
+        .collect();
+    let times: Vec<f64> = rows.iter().map(|r| r.t_s.unwrap_or(0.0)).collect();
+    let (mut k, mut t, mut q) = (0usize, times[0], rows[0].readings_m.clone());
+    let mut not_converged = 0u64;
+    let mut checksum = 0.0;
+    for i in 0..iters as usize {
+        let r = match case {
+            TendonCase::Warm | TendonCase::Track => {
+                ws.solve_readings(black_box(&rows[i % rows.len()].readings_m))
+            }
+            TendonCase::Tick => {
+                // benches/tendons.rs `Ticks::next`
+                t += 1e-3;
+                while k + 1 < rows.len() && t >= times[k + 1] {
+                    k += 1;
+                }
+                if k + 1 >= rows.len() {
+                    k = 0;
+                    t = times[0];
+                }
+                let (a, b) = (&rows[k].readings_m, &rows[k + 1].readings_m);
+                let (t0, t1) = (times[k], times[k + 1]);
+                let s = if t1 > t0 {
+                    ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                for ((q, a), b) in q.iter_mut().zip(a).zip(b) {
+                    *q = a + s * (b - a);
+                }
+                ws.solve_readings(black_box(&q))
+            }
+        };
+        not_converged += u64::from(!r.is_ok_and(|r| r.status.is_converged()));
+        let tip = ws.tip_position();
+        if let TendonCase::Track = case {
+            let rec = serde_json::json!({
+                "line": rows[i % rows.len()].line, "tip_position_m": [tip.x, tip.y, tip.z],
+                "tensions_n": ws.tensions(), "taut": ws.taut(),
+            });
+            black_box(rec.to_string());
+        }
+        checksum += tip.x + tip.y + tip.z;
+    }
+    let tip = ws.tip_position();
+    Ok(Outcome {
+        checksum: black_box(checksum),
+        tip: [tip.x, tip.y, tip.z],
+        not_converged,
+    })
 }

@@ -37,7 +37,7 @@
 use cablesense::calibrate::{
     calibrate, residuals_and_jacobian, CalibrationError, CalibrationModel, CalibrationSettings,
     CalibrationSetup, ColumnMap, Conditioning, FitParam, FrameSetup, InputTimeline, LmStatus,
-    ParamSpec, ReadingsModel, Recording, RigidTransform, SceneModel,
+    ParamSpec, Recording, RigidTransform, SceneModel, ServoModel,
 };
 use cablesense::nalgebra::{DMatrix, Vector3};
 use cablesense::validation::{set_values, ParamPath, TrackChain};
@@ -282,7 +282,7 @@ fn conditioning_chain_rule() {
     let rec = Recording::parse_str("rows.csv", &text, &map()).unwrap();
     let p = paths(&NAMES[1..]);
     let sc = set_values(&scene(), &p, &[dt, b]).unwrap();
-    let mut model = ReadingsModel::new(&sc, &p, &rec.input_names, None).unwrap();
+    let mut model = ServoModel::new(&sc, &p, &rec.input_names, None).unwrap();
     let mut sens = cablesense::calibrate::Sensitivities::default();
     model
         .sensitivities(&[dt, b], &[1e-5, 1e-7], &rec.rows, &mut sens)
@@ -454,7 +454,7 @@ fn time_offset_without_time_column_names_the_column() {
     let rec = Recording::parse_str("untimed.csv", &text, &map()).unwrap();
     let p = paths(&NAMES[1..2]);
     let sc = set_values(&scene(), &p, &[0.1]).unwrap();
-    let mut model = ReadingsModel::new(&sc, &p, &rec.input_names, None).unwrap();
+    let mut model = ServoModel::new(&sc, &p, &rec.input_names, None).unwrap();
     let e = model.predict(&rec.rows[0]).unwrap_err();
     let msg = e.to_string();
     assert!(matches!(e, CalibrationError::Model { .. }), "{e:?}");
@@ -472,7 +472,7 @@ fn time_offset_without_time_column_names_the_column() {
     // backlash alone needs no time
     let p = paths(&NAMES[2..]);
     let sc = set_values(&scene(), &p, &[2e-4]).unwrap();
-    let mut model = ReadingsModel::new(&sc, &p, &rec.input_names, None).unwrap();
+    let mut model = ServoModel::new(&sc, &p, &rec.input_names, None).unwrap();
     assert!(model.predict(&rec.rows[0]).is_ok());
 
     // the track chain: the row without a time stamp is refused naming the column,

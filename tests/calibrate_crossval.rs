@@ -11,7 +11,7 @@
 
 use cablesense::calibrate::{
     cross_validate, CalibrationSettings, ColumnMap, FitParam, Folds, FrameSetup, ParamSpec,
-    ReadingsModel, Recording, RigidTransform, SceneModel,
+    Recording, RigidTransform, SceneModel, ServoModel,
 };
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{set_values, ParamPath};
@@ -58,7 +58,7 @@ fn cross_validation_prefers_the_candidate_with_the_right_physics() {
     let sc = scene();
     let e: Vec<ParamPath> = vec!["robot/sections/*/youngs_modulus_pa".parse().unwrap()];
     let truth = set_values(&sc, &e, &[55e9]).unwrap();
-    let columns = ReadingsModel::reading_columns(&sc);
+    let columns = ServoModel::reading_columns(&sc);
     let mut ws = truth.tendon_workspace().unwrap();
     let mut rng = crate::calibrate_common::Rng::new(46);
     let mut gauss = || rng.gauss();

@@ -1,4 +1,4 @@
-//! The exact sensitivities of the readings model (`ReadingsModel::sensitivities`:
+//! The exact sensitivities of the readings model (`ServoModel::sensitivities`:
 //! implicit function theorem on the joint tendon residual at each row's converged
 //! state, `src/calibrate/readings_sens.rs`) against the checked central
 //! differences of the rows' converged poses (`calibrate::finite_differences`, the

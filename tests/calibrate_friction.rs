@@ -16,7 +16,7 @@
 //!   column's size (the step is 1e-3 of each parameter's scale for differences of
 //!   solves; the forward difference's own truncation error is of that order).
 
-use cablesense::calibrate::{CalibrationModel, ColumnMap, ReadingsModel, Recording, Sensitivities};
+use cablesense::calibrate::{CalibrationModel, ColumnMap, Recording, Sensitivities, ServoModel};
 use cablesense::validation::{set_values, ParamPath};
 use cablesense::Scene;
 
@@ -93,7 +93,7 @@ fn a_chain_does_not_inherit_the_last_sweeps_direction_memory() {
     let sc = set_values(&scene(), &paths, &values).unwrap();
     let rec = recording(12);
 
-    let mut fresh = ReadingsModel::new(&sc, &paths, &rec.input_names, None).unwrap();
+    let mut fresh = ServoModel::new(&sc, &paths, &rec.input_names, None).unwrap();
     let mut reference = Sensitivities::default();
     fresh
         .sensitivities(&values, &steps, &rec.rows, &mut reference)
@@ -102,7 +102,7 @@ fn a_chain_does_not_inherit_the_last_sweeps_direction_memory() {
 
     // a model that has just predicted the rows in reverse order (its direction
     // memory ends where the reversed chain left it)
-    let mut used = ReadingsModel::new(&sc, &paths, &rec.input_names, None).unwrap();
+    let mut used = ServoModel::new(&sc, &paths, &rec.input_names, None).unwrap();
     used.set_params(&values).unwrap();
     used.begin_chain();
     for row in rec.rows.iter().rev() {

@@ -4,7 +4,7 @@
 //!
 //! Robot: three 60 mm NiTi segments, four disks each, nine displacement-driven
 //! tendons at 4.5 mm (three per segment, 120 degrees apart, segments rotated by 40
-//! degrees), driven from servo readings (`ReadingsModel`, rows warm in sequence).
+//! degrees), driven from servo readings (`ServoModel`, rows warm in sequence).
 //! Truth: Young's modulus 55 GPa, tendon stiffness 4000 N, a tilted and shifted
 //! capture frame and a marker 8 mm beyond the tip. Start: 60 GPa, 5000 N, identity
 //! frame, offset (0, 0, 5 mm). Fitted: the two scene parameters, the capture frame
@@ -39,7 +39,7 @@
 
 use cablesense::calibrate::{
     calibrate, CalibrationReport, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam,
-    FrameSetup, LmStatus, ParamSpec, ReadingsModel, Recording, RigidTransform, SceneModel,
+    FrameSetup, LmStatus, ParamSpec, Recording, RigidTransform, SceneModel, ServoModel,
 };
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{set_values, ParamPath};
@@ -180,7 +180,7 @@ fn recording(sc: &Scene, seed: u64) -> Recording {
     let truth = set_values(sc, &paths(), &TRUTH).unwrap();
     let mut ws = truth.tendon_workspace().unwrap();
     let (frame, offset) = (true_frame(), true_offset());
-    let columns = ReadingsModel::reading_columns(sc);
+    let columns = ServoModel::reading_columns(sc);
     let mut csv = format!("{},tip_x,tip_y,tip_z\n", columns.join(","));
     for q in &q_true {
         let mut rep = ws.solve_readings(q).unwrap();

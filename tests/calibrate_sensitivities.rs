@@ -4,7 +4,7 @@
 //! analytic), against central differences of the residuals themselves, on a
 //! tendon-driven scene: the shipped two-segment TDCR
 //! (`data/scenes/tdcr_two_segment.toml`, six displacement-driven tendons) driven
-//! row by row from servo readings (`ReadingsModel`, warm in sequence). Proptest
+//! row by row from servo readings (`ServoModel`, warm in sequence). Proptest
 //! draws the scene parameters (Young's modulus, tendon stiffness, pretension), the
 //! capture frame, the marker offset and the readings of three rows.
 //!
@@ -42,7 +42,7 @@
 
 use cablesense::calibrate::{
     residuals_and_jacobian, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup,
-    ParamSpec, ReadingsModel, Recording, RigidTransform, SceneModel,
+    ParamSpec, Recording, RigidTransform, SceneModel, ServoModel,
 };
 use cablesense::nalgebra::{DMatrix, Vector3};
 use cablesense::validation::ParamPath;
@@ -127,7 +127,7 @@ proptest! {
     ) {
         let sc = scene();
         let p = paths();
-        let columns = ReadingsModel::reading_columns(&sc);
+        let columns = ServoModel::reading_columns(&sc);
         let rec = recording(&columns, amp, pick);
         let model = SceneModel::new(&sc, &p, &rec.input_names, None).unwrap();
         let params: Vec<FitParam> = p

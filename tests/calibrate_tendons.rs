@@ -11,8 +11,8 @@
 
 use cablesense::calibrate::{
     calibrate, CalibrationModel, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam,
-    FrameSetup, LmStatus, ParamSpec, Progress, ReadingsModel, Recording, RigidTransform, RowWork,
-    SceneModel, Stage,
+    FrameSetup, LmStatus, ParamSpec, Progress, Recording, RigidTransform, RowWork, SceneModel,
+    ServoModel, Stage,
 };
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{set_values, ParamPath};
@@ -56,7 +56,7 @@ fn tendon_robot_calibrates_back_from_servo_readings() {
     let p = params();
     let truth = [55e9, 4000.0];
     let true_scene = set_values(&sc, &p, &truth).unwrap();
-    let columns = ReadingsModel::reading_columns(&sc);
+    let columns = ServoModel::reading_columns(&sc);
     assert_eq!(columns.len(), 6);
     let mut ws = true_scene.tendon_workspace().unwrap();
     let mut rng = 0x2545f4914f6cdd1du64;

@@ -12,7 +12,7 @@
 //! per-stream state) reaches the same val error.
 
 use cablesense::calibrate::{
-    CalibrationModel, ColumnMap, ReadingsModel, Recording, RigidTransform, TipErrors,
+    CalibrationModel, ColumnMap, Recording, RigidTransform, ServoModel, TipErrors,
 };
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::track_errors;
@@ -46,7 +46,7 @@ fn stored_calibration_reproduces_its_val_error_and_beats_the_published_model() {
         &Vector3::from(spec.capture_to_base.translation_m),
     );
     let offset = Vector3::from(spec.marker_offset_m);
-    let mut model = ReadingsModel::new(&scene, &[], &val.input_names, spec.marker_s_m).unwrap();
+    let mut model = ServoModel::new(&scene, &[], &val.input_names, spec.marker_s_m).unwrap();
     let (mut predicted, mut measured) = (Vec::new(), Vec::new());
     for row in &val.rows {
         let pose = model.predict(row).unwrap();

@@ -1,17 +1,15 @@
 //! `calibrate(scene, train, val=None, ...)`: the scene's `[calibration]` table
 //! mapping a recording, the model the scene calls for (`calibrate::SceneModel`:
 //! servo readings for displacement-driven tendons, else tension columns), fitted
-//! with `cablesense::calibrate::calibrate`; the report comes back as a dict (the
+//! with `cablesense::calibrate_scene`; the report comes back as a dict (the
 //! layout of `cablesense calibrate`'s `report.json`) with the calibrated scene.
 
 use crate::Scene;
 use cablesense::calibrate::{
-    calibrate as core_calibrate, calibrated_scene, CalibrationError as CoreError, CalibrationModel,
-    CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup, ParamSpec,
-    ReadingsModel, Recording, RigidTransform, SceneModel, TipErrors,
+    calibrate_scene, scene_spec, CalibrationError as CoreError, CalibrationModel, ColumnMap,
+    ParamSpec, Recording, RigidTransform, SceneCalibration, SceneModel, TipErrors,
 };
 use cablesense::nalgebra::Vector3;
-use cablesense::validation::ParamPath;
 use numpy::PyArrayMethods;
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
@@ -94,11 +92,7 @@ pub fn calibrate<'py>(
     max_iterations: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let scene = &scene.inner;
-    let mut spec = scene.calibration.clone().unwrap_or_default();
-    if spec.inputs.is_empty() {
-        // a tendon-driven scene: its servo reading columns are the inputs
-        spec.inputs = ReadingsModel::reading_columns(scene);
-    }
+    let mut spec = scene_spec(scene);
     for p in params.unwrap_or_default() {
         spec.params.push(ParamSpec::new(p));
     }
@@ -113,30 +107,14 @@ pub fn calibrate<'py>(
             "nothing to fit: no params, no [[calibration.params]], frame and offset fixed".into(),
         ));
     }
-    let paths: Vec<ParamPath> = spec
-        .params
-        .iter()
-        .map(|p| p.path.parse())
-        .collect::<Result<_, _>>()
-        .map_err(|e| calibration_err(py, CoreError::Param(e)))?;
     let report = py.detach(|| {
         let map = ColumnMap::from_spec(&spec);
         let train = Recording::load(&train, &map)?;
         let val = val.map(|v| Recording::load(v, &map)).transpose()?;
-        let model = SceneModel::new(scene, &paths, &train.input_names, spec.marker_s_m)?;
-        let fit_params = FitParam::all_from_spec(&spec, model.values());
-        let frame = FrameSetup::from_spec(&spec);
-        let settings = CalibrationSettings::from_spec(&spec, threads);
-        let setup = CalibrationSetup {
-            model: &model,
-            params: fit_params,
-            frame,
-            train: &train,
-            val: val.as_ref(),
-            robot_length_m: model.robot_length(),
-        };
-        let report = core_calibrate(&setup, &settings, &mut |_| {})?;
-        let out_scene = calibrated_scene(scene, &spec, &report, &paths)?;
+        let SceneCalibration {
+            report,
+            scene: out_scene,
+        } = calibrate_scene(scene, &spec, &train, val.as_ref(), threads, &mut |_| {})?;
         let json = serde_json::to_string(&report).map_err(|e| CoreError::Io {
             path: "<report>".into(),
             why: e.to_string(),
@@ -167,10 +145,7 @@ pub fn predict_recording<'py>(
     recording: PathBuf,
 ) -> PyResult<Bound<'py, PyDict>> {
     let scene = &scene.inner;
-    let mut spec = scene.calibration.clone().unwrap_or_default();
-    if spec.inputs.is_empty() {
-        spec.inputs = ReadingsModel::reading_columns(scene);
-    }
+    let spec = scene_spec(scene);
     let out = py.detach(|| {
         let rec = Recording::load(&recording, &ColumnMap::from_spec(&spec))?;
         let frame = RigidTransform::from_vector(

@@ -12,11 +12,11 @@
 //! keep their place as a fraction of the section) and the cables' hole angles
 //! (`robot/cables/J/routing/angle_deg`); the capture frame and the marker offset are
 //! fitted by the calibration itself. The scene's `[readings]` conditioning (time
-//! offset, backlash) is applied as for [`super::ReadingsModel`].
+//! offset, backlash) is applied as for [`super::ServoModel`].
 
 use super::conditioning::{Conditioning, InputTimeline};
 use super::model::{patched_scene, CalibrationModel};
-use super::readings_model::{conditioned_into, ReadingsModel};
+use super::readings_model::{conditioned_into, ServoModel};
 use super::recording::RecordingRow;
 use super::CalibrationError;
 use crate::files::Scene;
@@ -83,7 +83,7 @@ impl CcModel {
         params: &[ParamPath],
         input_names: &[String],
     ) -> Result<Self, CalibrationError> {
-        let reading_columns = ReadingsModel::reading_columns(scene);
+        let reading_columns = ServoModel::reading_columns(scene);
         if reading_columns.is_empty() {
             return Err(CalibrationError::BadInput(
                 "the CC rung needs displacement-driven tendons (their readings)".into(),

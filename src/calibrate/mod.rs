@@ -36,6 +36,7 @@ mod readings_model;
 mod recording;
 mod report;
 mod run;
+mod scene_job;
 mod stats;
 pub mod uncertainty;
 
@@ -65,12 +66,13 @@ pub use lm::{
 };
 pub use model::{finite_differences, CalibrationModel, RowFailure, Sensitivities, TensionModel};
 pub use order::{chain_order, row_order};
-pub use readings_model::{ReadingsModel, SceneModel};
+pub use readings_model::{SceneModel, ServoModel};
 pub use recording::{
     is_default_input, parse_row_range, ColumnMap, Recording, RecordingRow, RowHistory,
 };
 pub use report::{calibrated_scene, write_report_svg, write_residuals_csv, SvgOptions};
 pub use run::{calibrate, frame_param_names, CalibrationSetup};
+pub use scene_job::{calibrate_scene, scene_spec, SceneCalibration};
 pub use stats::{
     parameter_statistics, percentile, ErrorStats, ParamStatistics, TipErrors, Unidentifiable,
     CORRELATION_LIMIT, NULL_DIRECTION_LIMIT,

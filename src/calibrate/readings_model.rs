@@ -31,7 +31,7 @@ mod sens;
 use sens::RowState;
 
 /// Servo readings -> tendon tensions and shape -> marker body pose.
-pub struct ReadingsModel {
+pub struct ServoModel {
     scene: Scene,
     params: Vec<ParamPath>,
     values: Vec<f64>,
@@ -93,7 +93,7 @@ fn model_err(context: String) -> impl FnOnce(crate::ModelError) -> CalibrationEr
     move |source| CalibrationError::Model { context, source }
 }
 
-impl ReadingsModel {
+impl ServoModel {
     /// A model of `scene` (with displacement-driven tendons) calibrating `params`;
     /// every driven tendon's reading column must be among `input_names`.
     pub fn new(
@@ -166,7 +166,7 @@ impl ReadingsModel {
     }
 }
 
-impl Clone for ReadingsModel {
+impl Clone for ServoModel {
     /// A fresh model at the same parameter values (the warm state is not copied).
     fn clone(&self) -> Self {
         let mut m = Self {
@@ -193,7 +193,7 @@ impl Clone for ReadingsModel {
     }
 }
 
-impl CalibrationModel for ReadingsModel {
+impl CalibrationModel for ServoModel {
     fn set_params(&mut self, values: &[f64]) -> Result<(), CalibrationError> {
         if values == self.values.as_slice() {
             return Ok(());
@@ -264,14 +264,14 @@ impl CalibrationModel for ReadingsModel {
     }
 }
 
-/// The calibration model a scene calls for: [`ReadingsModel`] when it has
+/// The calibration model a scene calls for: [`ServoModel`] when it has
 /// displacement-driven tendons, else [`TensionModel`].
 #[derive(Clone)]
 pub enum SceneModel {
     /// Tension-driven (rows hold `tension_*`, `force_*`, `mass_*`).
     Tension(Box<TensionModel>),
     /// Servo readings of displacement-driven tendons.
-    Readings(Box<ReadingsModel>),
+    Readings(Box<ServoModel>),
 }
 
 impl SceneModel {
@@ -282,7 +282,7 @@ impl SceneModel {
         input_names: &[String],
         marker_s: Option<f64>,
     ) -> Result<Self, CalibrationError> {
-        Ok(if ReadingsModel::reading_columns(scene).is_empty() {
+        Ok(if ServoModel::reading_columns(scene).is_empty() {
             Self::Tension(Box::new(TensionModel::new(
                 scene,
                 params,
@@ -290,7 +290,7 @@ impl SceneModel {
                 marker_s,
             )?))
         } else {
-            Self::Readings(Box::new(ReadingsModel::new(
+            Self::Readings(Box::new(ServoModel::new(
                 scene,
                 params,
                 input_names,

@@ -1,4 +1,4 @@
-//! Sensitivities of [`ReadingsModel`]'s poses to the calibration parameters by the
+//! Sensitivities of [`ServoModel`]'s poses to the calibration parameters by the
 //! implicit function theorem, from the converged state each row's prediction left
 //! (no row is solved again).
 //!
@@ -39,7 +39,7 @@
 //! row's pose depends on the direction memory of the chain, not on `z` alone), or
 //! when a row's sweep or `F_z` fails (singular).
 
-use super::{conditioned_into, model_err, ReadingsModel};
+use super::{conditioned_into, model_err, ServoModel};
 use crate::calibrate::conditioning::{Conditioning, InputTimeline};
 use crate::calibrate::frame::rotation_vector;
 use crate::calibrate::model::{
@@ -138,7 +138,7 @@ fn tendon_residual(
     }
 }
 
-impl ReadingsModel {
+impl ServoModel {
     /// [`CalibrationModel::sensitivities`] by the implicit function theorem (module
     /// docs), with [`finite_differences`] as the fallback.
     pub(super) fn exact_sensitivities(

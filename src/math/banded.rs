@@ -32,11 +32,6 @@ impl BandedLu {
         }
     }
 
-    /// Size of the system.
-    pub fn dim(&self) -> usize {
-        self.n
-    }
-
     #[inline(always)]
     fn idx(&self, r: usize, c: usize) -> usize {
         debug_assert!(c + self.kl >= r && c <= r + self.kl + self.ku, "({r}, {c})");

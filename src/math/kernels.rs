@@ -120,12 +120,6 @@ pub fn cross<T: Real>(a: &Vector3<T>, b: &Vector3<T>) -> Vector3<T> {
     )
 }
 
-/// `a . b`.
-#[inline(always)]
-pub fn dot<T: Real>(a: &Vector3<T>, b: &Vector3<T>) -> T {
-    dot3(a.x, b.x, a.y, b.y, a.z, b.z)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -144,6 +138,5 @@ mod tests {
         assert!((mat_mul(&a, &b) - a * b).norm() < 1e-13);
         assert!((gram(&a) - a.transpose() * a).norm() < 1e-13);
         assert!((cross(&v, &w) - v.cross(&w)).norm() < 1e-14);
-        assert!((dot(&v, &w) - v.dot(&w)).abs() < 1e-14);
     }
 }

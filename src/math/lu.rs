@@ -25,11 +25,6 @@ impl DenseLu {
         }
     }
 
-    /// Size of the system.
-    pub fn dim(&self) -> usize {
-        self.n
-    }
-
     /// Number of factorisations so far (a new value means new factors).
     pub fn factorizations(&self) -> u64 {
         self.factorizations

@@ -16,9 +16,9 @@ pub(crate) mod warm;
 
 pub use banded::BandedLu;
 pub use dual::Dual;
-pub use kernels::{cross, dot, gram, mat_mul, mat_skew, mat_t_vec, mat_vec, mat_vec_f64};
+pub use kernels::{cross, gram, mat_mul, mat_skew, mat_t_vec, mat_vec, mat_vec_f64};
 pub use lu::DenseLu;
-pub use so3::{exp_so3, orthonormalize, rotation_angle_between, skew};
+pub use so3::{exp_so3, orthonormalize, skew};
 
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};

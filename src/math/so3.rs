@@ -34,9 +34,3 @@ pub fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
     }
     Matrix3::identity() + k * (th.sin() / th) + k * k * ((1.0 - th.cos()) / (th * th))
 }
-
-/// Angle (rad) of the rotation `a^T b`.
-pub fn rotation_angle_between(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
-    let c = ((a.transpose() * b).trace() - 1.0) * 0.5;
-    c.clamp(-1.0, 1.0).acos()
-}

@@ -22,7 +22,7 @@
 use super::track_chain::{track_errors, TrackErrors};
 use crate::calibrate::{
     CalibrationError, CalibrationModel, CalibrationReport, ColumnMap, LmStatus, ParamStatistics,
-    ReadingsModel, Recording, RigidTransform, RowResult, Split, TipErrors,
+    Recording, RigidTransform, RowResult, ServoModel, Split, TipErrors,
 };
 use crate::files::Scene;
 use nalgebra::Vector3;
@@ -278,7 +278,7 @@ pub fn hardware_benchmark(
         &Vector3::from(spec.capture_to_base.translation_m),
     );
     let offset = Vector3::from(spec.marker_offset_m);
-    let mut model = ReadingsModel::new(scene, &[], &val.input_names, spec.marker_s_m)?;
+    let mut model = ServoModel::new(scene, &[], &val.input_names, spec.marker_s_m)?;
     let robot_length_m = scene
         .build_robot()
         .map_err(|source| CalibrationError::Model {

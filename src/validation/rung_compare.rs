@@ -21,8 +21,8 @@
 use crate::calibrate::uncertainty::{coverage_90, lateral_deflection, Coverage};
 use crate::calibrate::{
     calibrate, row_order, CalibrationError, CalibrationModel, CalibrationSettings,
-    CalibrationSetup, CcModel, FitParam, FrameSetup, ParamSpec, ReadingsModel, Recording,
-    RigidTransform, RowOrder, Split, TipErrors,
+    CalibrationSetup, CcModel, FitParam, FrameSetup, ParamSpec, Recording, RigidTransform,
+    RowOrder, ServoModel, Split, TipErrors,
 };
 use crate::files::Scene;
 use crate::validation::ParamPath;
@@ -166,7 +166,7 @@ pub fn compare_with_cc(
     let offset = Vector3::from(spec.marker_offset_m);
     // Cosserat: every held-out row, failures kept as None
     let t0 = Instant::now();
-    let mut model = ReadingsModel::new(scene, &[], &val.input_names, spec.marker_s_m)?;
+    let mut model = ServoModel::new(scene, &[], &val.input_names, spec.marker_s_m)?;
     let mut cos: Vec<Option<Vector3<f64>>> = vec![None; val.rows.len()];
     let mut failures: HashMap<usize, String> = HashMap::new();
     model.begin_chain();

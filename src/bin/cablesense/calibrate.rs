@@ -15,9 +15,8 @@ use crate::progress;
 use crate::validate::{data_dir, fitted_file, parse_tables};
 use anyhow::Context;
 use cablesense::calibrate::{
-    calibrate, calibrated_scene, parse_row_range, write_report_svg, write_residuals_csv,
-    CalibrationReport, CalibrationSettings, CalibrationSetup, ColumnMap, FitParam, FrameSetup,
-    ParamSpec, ReadingsModel, Recording, RowWork, SceneModel, Stage,
+    calibrate_scene, parse_row_range, scene_spec, write_report_svg, write_residuals_csv,
+    CalibrationReport, ColumnMap, ParamSpec, Recording, RowWork, SceneCalibration, Stage,
 };
 use cablesense::files::demo::{DataRef, DataSource};
 use cablesense::validation::{
@@ -295,7 +294,7 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
         .context("recording mode needs a SCENE (or use --table for the thesis tables)")?;
     let data = a.data.clone().context("recording mode needs --data FILE")?;
     let scene = DataRef::parse(&scene_path)?.scene()?;
-    let mut spec = scene.calibration.clone().unwrap_or_default();
+    let mut spec = scene_spec(&scene);
     if let Some(c) = &a.marker_columns {
         let cols: Vec<String> = c.split(',').map(|x| x.trim().to_string()).collect();
         spec.marker_columns = cols
@@ -310,10 +309,6 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     }
     if a.huber.is_some() {
         spec.huber_sigma = a.huber;
-    }
-    if spec.inputs.is_empty() {
-        // a tendon-driven scene: its servo reading columns are the inputs
-        spec.inputs = ReadingsModel::reading_columns(&scene);
     }
     if let Some(i) = &a.inputs {
         spec.inputs = i.split(',').map(|x| x.trim().to_string()).collect();
@@ -367,23 +362,6 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     } else {
         train
     };
-    let paths: Vec<ParamPath> = spec
-        .params
-        .iter()
-        .map(|p| p.path.parse())
-        .collect::<Result<_, _>>()?;
-    let model = SceneModel::new(&scene, &paths, &train.input_names, spec.marker_s_m)?;
-    let params = FitParam::all_from_spec(&spec, model.values());
-    let frame = FrameSetup::from_spec(&spec);
-    let settings = CalibrationSettings::from_spec(&spec, a.threads);
-    let setup = CalibrationSetup {
-        model: &model,
-        params,
-        frame,
-        train: &train,
-        val: val.as_ref(),
-        robot_length_m: model.robot_length(),
-    };
     println!(
         "calibrating {} on {} ({} rows{}), inputs {}",
         scene_path.display(),
@@ -397,7 +375,7 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     let pb = progress::bar(spec.max_iterations as u64, a.quiet);
     let started = std::time::Instant::now();
     let dog = progress::Watchdog::stderr("calibrate");
-    let report = calibrate(&setup, &settings, &mut |p| {
+    let job = calibrate_scene(&scene, &spec, &train, val.as_ref(), a.threads, &mut |p| {
         let stage = match p.stage {
             Stage::Start => "start",
             Stage::Frame => "frame",
@@ -431,10 +409,12 @@ fn run_recording(a: Args) -> anyhow::Result<ExitCode> {
     });
     drop(dog);
     pb.finish_and_clear();
-    let report = report?;
+    let SceneCalibration {
+        report,
+        scene: out_scene,
+    } = job?;
     print_report(&report, started.elapsed().as_secs_f64());
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let out_scene = calibrated_scene(&scene, &spec, &report, &paths)?;
     let toml_path = a.out.join("calibrated.toml");
     std::fs::write(&toml_path, out_scene.to_toml_string())
         .with_context(|| format!("writing {}", toml_path.display()))?;

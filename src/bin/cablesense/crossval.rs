@@ -8,7 +8,7 @@
 use anyhow::Context;
 use cablesense::calibrate::{
     cross_validate, parse_families, row_labels, CalibrationSettings, CrossValidation, FitParam,
-    Folds, FrameSetup, ReadingsModel, Recording, SceneModel,
+    Folds, FrameSetup, Recording, SceneModel, ServoModel,
 };
 use cablesense::files::demo::DataRef;
 use cablesense::validation::ParamPath;
@@ -76,7 +76,7 @@ fn candidate(path: &std::path::Path, a: &Args) -> anyhow::Result<Candidate> {
         .clone()
         .with_context(|| format!("{}: no [calibration] table", path.display()))?;
     if spec.inputs.is_empty() {
-        spec.inputs = ReadingsModel::reading_columns(&scene);
+        spec.inputs = ServoModel::reading_columns(&scene);
     }
     if let Some(m) = a.max_iterations {
         spec.max_iterations = m;
