@@ -142,17 +142,12 @@ fn ftdcr_full_box_counts_failures_whatever_the_threads() {
     };
     let one = sample_workspace(&tw, &limits, &settings(1), &|_| {}).unwrap();
     let two = sample_workspace(&tw, &limits, &settings(2), &|_| {}).unwrap();
-    // (bit for bit: a failed sample's NaN tip is not `==` to itself)
-    let bits = |c: &cablesense::command::WorkspaceCloud| -> Vec<u64> {
-        c.tips_m
-            .iter()
-            .flat_map(|t| t.iter().map(|v| v.to_bits()))
-            .collect()
-    };
-    assert_eq!(one.status, two.status);
-    assert_eq!(one.passes, two.passes);
-    assert_eq!(bits(&one), bits(&two));
-    assert_eq!(one.readings_m, two.readings_m);
+    // bit for bit, failed samples' NaN tips included (`WorkspaceCloud`'s `==`)
+    assert_eq!(one, two);
+    assert!(one.tips_m.iter().any(|t| t.x.is_nan()));
+    let mut other = one.clone();
+    other.tips_m[0].x = f64::from_bits(other.tips_m[0].x.to_bits() ^ 1);
+    assert_ne!(one, other, "a one-ulp change of a tip is a different cloud");
     assert_eq!((one.len(), one.passes.len()), (n, n));
     let by = one.passes_by_status();
     assert_eq!(by.iter().map(|b| b.0).sum::<usize>(), n);

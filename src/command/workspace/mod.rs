@@ -185,8 +185,10 @@ impl SampleStatus {
 }
 
 /// The sampled workspace: per sample (in Halton order, `k = 1..=N`) its readings,
-/// tip and status.
-#[derive(Clone, Debug, PartialEq)]
+/// tip and status. Two clouds are equal when every field is bit for bit the same
+/// (an unsolved sample's NaN tip equals the other cloud's NaN: the comparison asks
+/// "the same run?", as a determinism test does).
+#[derive(Clone, Debug)]
 pub struct WorkspaceCloud {
     /// Readings columns of the driven tendons.
     pub columns: Vec<String>,
@@ -204,6 +206,26 @@ pub struct WorkspaceCloud {
     /// the nested method's passes included). Deterministic, unlike a time: where
     /// the sampling's time goes, per status ([`WorkspaceCloud::passes_by_status`]).
     pub passes: Vec<u32>,
+}
+
+impl PartialEq for WorkspaceCloud {
+    fn eq(&self, other: &Self) -> bool {
+        fn bits(a: &[f64], b: &[f64]) -> bool {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        }
+        fn points(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> bool {
+            a.len() == b.len()
+                && a.iter()
+                    .zip(b)
+                    .all(|(x, y)| bits(x.as_slice(), y.as_slice()))
+        }
+        self.columns == other.columns
+            && bits(&self.readings_m, &other.readings_m)
+            && points(&self.tips_m, &other.tips_m)
+            && points(&self.markers_m, &other.markers_m)
+            && self.status == other.status
+            && self.passes == other.passes
+    }
 }
 
 impl WorkspaceCloud {
