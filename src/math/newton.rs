@@ -1,7 +1,8 @@
 //! The chord-Newton driver shared by the shooting solvers
 //! (`statics::workspace::newton`, `statics::multiple::newton`): [`chord_newton`]
-//! over a [`ChordNewton`] problem; the tendon solver's joint path uses the same
-//! sufficient-decrease constant.
+//! over a [`ChordNewton`] problem. The tendon solver's paths, whose iterations
+//! differ (module docs of `tendons::solve::joint` and `nested`), share its
+//! constants and the halving schedule ([`halve`]).
 //!
 //! A fresh Jacobian's step is damped by backtracking on `||r||_2` with Armijo's
 //! sufficient-decrease test `||r(x + a dx)|| < (1 - c a) ||r(x)||` (Nocedal &
@@ -21,22 +22,34 @@ pub(crate) const MAX_CHORD_STEPS: usize = 8;
 /// Armijo's constant `c` of the sufficient-decrease test.
 pub(crate) const ARMIJO_SLOPE: f64 = 1e-4;
 
+/// A factorisation whose reciprocal condition estimate is at most this is singular
+/// to working precision.
+pub(crate) const MIN_RCOND: f64 = 1e-14;
+
 /// Halvings of the step a backtracking line search tries (down to `2^-29`).
 const MAX_HALVINGS: usize = 30;
 
-/// Backtracking from the full step: `trial(alpha)` evaluates the point `x + alpha
-/// dx` and returns its `||r||_2` (`None` if the evaluation failed); the first
-/// `alpha` in `1, 1/2, 1/4, ...` ([`MAX_HALVINGS`] trials) whose norm passes
-/// Armijo's test against `f0 = ||r(x)||_2` is returned, `None` if none does.
-pub(crate) fn backtrack(f0: f64, mut trial: impl FnMut(f64) -> Option<f64>) -> Option<f64> {
+/// The first `alpha` in `1, 1/2, 1/4, ...` (`trials` of them) that `accept`s,
+/// `None` if none does.
+pub(crate) fn halve(trials: usize, mut accept: impl FnMut(f64) -> bool) -> Option<f64> {
     let mut alpha = 1.0;
-    for _ in 0..MAX_HALVINGS {
-        if trial(alpha).is_some_and(|f| f < (1.0 - ARMIJO_SLOPE * alpha) * f0) {
+    for _ in 0..trials {
+        if accept(alpha) {
             return Some(alpha);
         }
         alpha *= 0.5;
     }
     None
+}
+
+/// Backtracking from the full step: `trial(alpha)` evaluates the point `x + alpha
+/// dx` and returns its `||r||_2` (`None` if the evaluation failed); the first
+/// `alpha` ([`MAX_HALVINGS`] halvings) whose norm passes Armijo's test against
+/// `f0 = ||r(x)||_2` is returned, `None` if none does.
+pub(crate) fn backtrack(f0: f64, mut trial: impl FnMut(f64) -> Option<f64>) -> Option<f64> {
+    halve(MAX_HALVINGS, |alpha| {
+        trial(alpha).is_some_and(|f| f < (1.0 - ARMIJO_SLOPE * alpha) * f0)
+    })
 }
 
 /// What a problem's convergence test found at the current point.
@@ -60,7 +73,7 @@ pub(crate) enum End {
     Failed,
     /// A fresh Jacobian was due with `max_jacobians` of them spent.
     MaxJacobians,
-    /// The Jacobian's factorisation is singular to working precision.
+    /// The Jacobian's factorisation is singular to working precision ([`MIN_RCOND`]).
     Singular,
     /// No step length passed the line search; the current point is re-evaluated.
     Stalled,
@@ -72,14 +85,15 @@ pub(crate) enum End {
 pub(crate) trait ChordNewton {
     /// The convergence test at the current point.
     fn test(&mut self) -> Test;
-    /// Whether a factorised Jacobian (fresh or from an earlier point) is at hand.
-    fn jacobian_valid(&self) -> bool;
-    /// Forget the factorised Jacobian: the next step takes a fresh one.
-    fn drop_jacobian(&mut self);
+    /// Whether a factorised Jacobian (fresh or from an earlier point) is at hand:
+    /// the driver sets it after a factorisation and clears it to force a fresh one.
+    fn jacobian_ok(&mut self) -> &mut bool;
     /// Before each step, after the test (e.g. the inner solves' tolerance).
     fn prepare(&mut self) {}
-    /// Evaluate and factorise the Jacobian at the current point (valid after).
-    fn refresh(&mut self) -> Result<(), End>;
+    /// Evaluate the Jacobian at the current point; `false` if that failed.
+    fn jacobian(&mut self) -> bool;
+    /// Factorise it: its reciprocal condition estimate, `None` if singular.
+    fn factor(&mut self) -> Option<f64>;
     /// The step `dx` at the current point (`fresh`: with the Jacobian just made).
     fn step(&mut self, fresh: bool);
     /// `||r||_2` at the current point.
@@ -128,10 +142,10 @@ pub(crate) fn chord_newton(p: &mut impl ChordNewton, max_jacobians: usize) -> Ou
             Test::Step => {}
         }
         if chord_steps >= MAX_CHORD_STEPS {
-            p.drop_jacobian();
+            *p.jacobian_ok() = false;
         }
         p.prepare();
-        let fresh = !p.jacobian_valid();
+        let fresh = !*p.jacobian_ok();
         if fresh && jacobians >= max_jacobians {
             break End::MaxJacobians;
         }
@@ -139,8 +153,12 @@ pub(crate) fn chord_newton(p: &mut impl ChordNewton, max_jacobians: usize) -> Ou
         if fresh {
             jacobians += 1;
             chord_steps = 0;
-            if let Err(end) = p.refresh() {
-                break end;
+            if !p.jacobian() {
+                break End::Failed;
+            }
+            match p.factor() {
+                Some(rc) if rc > MIN_RCOND => *p.jacobian_ok() = true,
+                _ => break End::Singular,
             }
         }
         p.step(fresh);
@@ -150,18 +168,18 @@ pub(crate) fn chord_newton(p: &mut impl ChordNewton, max_jacobians: usize) -> Ou
             if p.trial(1.0).is_some_and(|f| p.chord_keeps(f, f0)) {
                 p.accept(1.0, false);
             } else {
-                p.drop_jacobian();
+                *p.jacobian_ok() = false;
             }
             continue;
         }
         let Some(alpha) = p.search(f0) else {
             p.restore();
-            p.drop_jacobian();
+            *p.jacobian_ok() = false;
             break End::Stalled;
         };
         p.accept(alpha, true);
         if alpha < 1.0 {
-            p.drop_jacobian();
+            *p.jacobian_ok() = false;
         }
     };
     Outcome {
@@ -202,7 +220,8 @@ mod tests {
         x: f64,
         trial_x: f64,
         dx: f64,
-        jac: Option<f64>,
+        jac: f64,
+        jac_ok: bool,
         /// `true` for a fresh step, `false` for a chord one, in order.
         steps: Vec<bool>,
     }
@@ -215,19 +234,19 @@ mod tests {
                 Test::Step
             }
         }
-        fn jacobian_valid(&self) -> bool {
-            self.jac.is_some()
+        fn jacobian_ok(&mut self) -> &mut bool {
+            &mut self.jac_ok
         }
-        fn drop_jacobian(&mut self) {
-            self.jac = None;
+        fn jacobian(&mut self) -> bool {
+            self.jac = 2.0 * self.x;
+            true
         }
-        fn refresh(&mut self) -> Result<(), End> {
-            self.jac = Some(2.0 * self.x).filter(|j| *j != 0.0);
-            self.jac.map(|_| ()).ok_or(End::Singular)
+        fn factor(&mut self) -> Option<f64> {
+            (self.jac != 0.0).then_some(1.0)
         }
         fn step(&mut self, fresh: bool) {
             self.steps.push(fresh);
-            self.dx = -(self.x * self.x - 2.0) / self.jac.unwrap_or(f64::NAN);
+            self.dx = -(self.x * self.x - 2.0) / self.jac;
         }
         fn norm(&self) -> f64 {
             (self.x * self.x - 2.0).abs()
@@ -252,7 +271,8 @@ mod tests {
             x: 1.0,
             trial_x: 0.0,
             dx: 0.0,
-            jac: None,
+            jac: 0.0,
+            jac_ok: false,
             steps: Vec::new(),
         };
         let out = chord_newton(&mut p, 10);
@@ -263,7 +283,7 @@ mod tests {
         assert_eq!(out.jacobians, p.steps.iter().filter(|f| **f).count());
         assert!(out.jacobians < out.iterations);
         p.x = 0.0;
-        p.jac = None;
+        p.jac_ok = false;
         assert_eq!(chord_newton(&mut p, 10).end, End::Singular);
         p.x = 1.0;
         assert_eq!(chord_newton(&mut p, 0).end, End::MaxJacobians);

@@ -7,7 +7,7 @@ use super::{max_abs, norm2, offset, Multi, BASE, NODE, NODE_R};
 use crate::integrate::State;
 #[cfg(doc)]
 use crate::math::newton::CHORD_CONTRACTION;
-use crate::math::newton::{chord_newton, ChordNewton, End, Test};
+use crate::math::newton::{chord_newton, ChordNewton, Test};
 use crate::math::{exp_so3, Dual, Real};
 use crate::statics::plan::Plan;
 use crate::statics::SolveStatus;
@@ -234,23 +234,16 @@ impl ChordNewton for Nodes<'_> {
         }
     }
 
-    fn jacobian_valid(&self) -> bool {
-        self.m.lu_valid
+    fn jacobian_ok(&mut self) -> &mut bool {
+        &mut self.m.lu_valid
     }
 
-    fn drop_jacobian(&mut self) {
-        self.m.lu_valid = false;
+    fn jacobian(&mut self) -> bool {
+        self.m.jacobian(self.plan, self.ld)
     }
 
-    fn refresh(&mut self) -> Result<(), End> {
-        if !self.m.jacobian(self.plan, self.ld) {
-            return Err(End::Failed);
-        }
-        match self.m.lu.factor() {
-            Some(rc) if rc > 1e-14 => self.m.lu_valid = true,
-            _ => return Err(End::Singular),
-        }
-        Ok(())
+    fn factor(&mut self) -> Option<f64> {
+        self.m.lu.factor()
     }
 
     fn step(&mut self, _fresh: bool) {

@@ -4,7 +4,7 @@
 use super::*;
 #[cfg(doc)]
 use crate::math::newton::CHORD_CONTRACTION;
-use crate::math::newton::{chord_newton, ChordNewton, End, Test};
+use crate::math::newton::{chord_newton, ChordNewton, Test};
 
 impl Workspace {
     /// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer
@@ -221,12 +221,8 @@ impl ChordNewton for AtScale<'_> {
         }
     }
 
-    fn jacobian_valid(&self) -> bool {
-        self.ws.lu_valid
-    }
-
-    fn drop_jacobian(&mut self) {
-        self.ws.lu_valid = false;
+    fn jacobian_ok(&mut self) -> &mut bool {
+        &mut self.ws.lu_valid
     }
 
     /// Inexact inner solves while far away: 1e-10 of the outer residual, between
@@ -236,15 +232,12 @@ impl ChordNewton for AtScale<'_> {
         ws.b64.local_tol = ws.settle_tolerance(1e-10 * max_abs(&ws.res));
     }
 
-    fn refresh(&mut self) -> Result<(), End> {
-        if !self.ws.jacobian(self.lam) {
-            return Err(End::Failed);
-        }
-        match self.ws.lu.factor() {
-            Some(rc) if rc > 1e-14 => self.ws.lu_valid = true,
-            _ => return Err(End::Singular),
-        }
-        Ok(())
+    fn jacobian(&mut self) -> bool {
+        self.ws.jacobian(self.lam)
+    }
+
+    fn factor(&mut self) -> Option<f64> {
+        self.ws.lu.factor()
     }
 
     /// A chord step with `use_broyden` uses the reused Jacobian's inverse with the
