@@ -5,8 +5,6 @@ use super::cables::nbr_f64;
 use super::intervals::{integrate, LoadCtx};
 use super::{max_abs, norm2, offset, Multi, BASE, NODE, NODE_R};
 use crate::integrate::State;
-#[cfg(doc)]
-use crate::math::newton::CHORD_CONTRACTION;
 use crate::math::newton::{chord_newton, ChordNewton, Test};
 use crate::math::{exp_so3, Dual, Real};
 use crate::statics::plan::Plan;
@@ -191,8 +189,9 @@ impl Multi {
     /// Newton at the current node states until `max_abs(res) <= tol`, at most
     /// `max_jacobians` fresh Jacobians ([`chord_newton`]: a factorisation left from
     /// an earlier point is reused while its full step shrinks `||r||_2` by
-    /// [`CHORD_CONTRACTION`]; a fresh exact Jacobian's step gets a backtracking line
-    /// search). Adds the accepted steps to `moved`; counts fresh Jacobians in `fresh`.
+    /// [`crate::math::newton::CHORD_CONTRACTION`]; a fresh exact Jacobian's step gets
+    /// a backtracking line search). Adds the accepted steps to `moved`; counts fresh
+    /// Jacobians in `fresh`.
     pub(super) fn newton(
         &mut self,
         plan: &Plan,

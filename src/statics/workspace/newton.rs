@@ -2,8 +2,6 @@
 //! line search and the f64 evaluations it needs.
 
 use super::*;
-#[cfg(doc)]
-use crate::math::newton::CHORD_CONTRACTION;
 use crate::math::newton::{chord_newton, ChordNewton, Test};
 
 impl Workspace {
@@ -143,9 +141,9 @@ impl Workspace {
     ///
     /// The Jacobian is exact (dual numbers) where it is evaluated, and is reused for
     /// further full steps while they contract the residual by at least
-    /// [`CHORD_CONTRACTION`] (the chord method, with Broyden's update when
-    /// `use_broyden`; warm starts reuse the previous solve's factorisation). A fresh
-    /// Jacobian's step gets a backtracking line search on `||r||_2`.
+    /// [`crate::math::newton::CHORD_CONTRACTION`] (the chord method, with Broyden's
+    /// update when `use_broyden`; warm starts reuse the previous solve's
+    /// factorisation). A fresh Jacobian's step gets a backtracking line search.
     pub(super) fn newton(&mut self, lam: f64, max_iterations: usize) -> (SolveStatus, usize) {
         self.first_taken = false;
         if !self.eval_at(false, lam) {

@@ -27,8 +27,8 @@ impl TendonWorkspace {
         // (`CHORD_CONTRACTION`), or a change of the active set; otherwise a chord
         // step reuses the last factorisation. Not `math::newton::chord_newton`: a
         // chord step that decreases |G| at all is taken (there it is rejected unless
-        // it contracts), no cap on chord steps, every pass counts as an iteration
-        // (there only fresh Jacobians do), and the merit is max |G|, not ||G||_2
+        // it contracts), chord steps are not capped, the limit is on passes (there on
+        // fresh Jacobians), and the merit is max |G|, not ||G||_2
         let mut need_fresh = true;
         for it in 0..self.tendon_settings().max_iterations {
             self.report.iterations = it;
