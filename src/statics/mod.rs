@@ -71,6 +71,20 @@ impl SolveStatus {
     }
 }
 
+impl From<crate::math::newton::End> for SolveStatus {
+    /// The status of a chord-Newton run's end (a failed evaluation: `NonFinite`).
+    fn from(end: crate::math::newton::End) -> Self {
+        use crate::math::newton::End;
+        match end {
+            End::Converged => Self::Converged,
+            End::Failed => Self::NonFinite,
+            End::MaxJacobians => Self::MaxIterations,
+            End::Singular => Self::IllConditioned,
+            End::Stalled => Self::Stalled,
+        }
+    }
+}
+
 /// Counts and outcome of one solve (diffsol-style statistics).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolveReport {

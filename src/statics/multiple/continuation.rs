@@ -23,6 +23,7 @@ use super::cables::nbr_f64;
 use super::intervals::{design_intensity, integrate, new_rec, LoadCtx};
 use super::{max_abs, Multi, NODE};
 use crate::integrate::State;
+use crate::math::newton::MIN_RCOND;
 use crate::math::step::StepRule;
 use crate::math::{Dual, Real};
 use crate::statics::plan::Plan;
@@ -243,7 +244,7 @@ impl Multi {
             }
             self.lu_valid = false;
             match self.lu.factor() {
-                Some(rc) if rc > 1e-14 => self.lu_valid = true,
+                Some(rc) if rc > MIN_RCOND => self.lu_valid = true,
                 _ => return Err(SolveStatus::IllConditioned),
             }
         }

@@ -5,7 +5,7 @@ use super::cables::nbr_f64;
 use super::intervals::{integrate, LoadCtx};
 use super::{max_abs, norm2, offset, Multi, BASE, NODE, NODE_R};
 use crate::integrate::State;
-use crate::math::newton::{backtrack, CHORD_CONTRACTION, MAX_CHORD_STEPS};
+use crate::math::newton::{chord_newton, ChordNewton, Test};
 use crate::math::{exp_so3, Dual, Real};
 use crate::statics::plan::Plan;
 use crate::statics::SolveStatus;
@@ -187,10 +187,11 @@ impl Multi {
     }
 
     /// Newton at the current node states until `max_abs(res) <= tol`, at most
-    /// `max_jacobians` fresh Jacobians. A factorisation left from an earlier point
-    /// (the chord method) is reused while its full step shrinks `||r||_2` by
-    /// [`CHORD_CONTRACTION`]; a fresh exact Jacobian's step gets a backtracking line
-    /// search. Adds the accepted steps to `moved`; counts fresh Jacobians in `fresh`.
+    /// `max_jacobians` fresh Jacobians ([`chord_newton`]: a factorisation left from
+    /// an earlier point is reused while its full step shrinks `||r||_2` by
+    /// [`crate::math::newton::CHORD_CONTRACTION`]; a fresh exact Jacobian's step gets
+    /// a backtracking line search). Adds the accepted steps to `moved`; counts fresh
+    /// Jacobians in `fresh`.
     pub(super) fn newton(
         &mut self,
         plan: &Plan,
@@ -202,71 +203,78 @@ impl Multi {
         if !self.eval(plan, ld, false) {
             return (SolveStatus::NonFinite, 0);
         }
-        let n = self.n_unknowns();
-        let mut it = 0;
-        let mut chord_steps = 0;
-        loop {
-            if max_abs(&self.res) <= tol {
-                return (SolveStatus::Converged, it);
-            }
-            if chord_steps >= MAX_CHORD_STEPS {
-                self.lu_valid = false;
-            }
-            let fresh = !self.lu_valid;
-            if fresh && self.fresh >= max_jacobians {
-                return (SolveStatus::MaxIterations, it);
-            }
-            it += 1;
-            if fresh {
-                self.fresh += 1;
-                chord_steps = 0;
-                if !self.jacobian(plan, ld) {
-                    return (SolveStatus::NonFinite, it);
-                }
-                match self.lu.factor() {
-                    Some(rc) if rc > 1e-14 => self.lu_valid = true,
-                    _ => return (SolveStatus::IllConditioned, it),
-                }
-            }
-            for i in 0..n {
-                self.dx[i] = -self.res[i];
-            }
-            self.lu.solve_in_place(&mut self.dx);
-            let f0 = norm2(&self.res);
-            if !fresh {
-                chord_steps += 1;
-                self.step_into(plan, 1.0, true);
-                if self.eval(plan, ld, true) && norm2(&self.res_trial) < CHORD_CONTRACTION * f0 {
-                    self.accept(1.0);
-                } else {
-                    self.lu_valid = false;
-                }
-                continue;
-            }
-            let found = backtrack(f0, |alpha| {
-                self.step_into(plan, alpha, true);
-                self.eval(plan, ld, true).then(|| norm2(&self.res_trial))
-            });
-            let Some(alpha) = found else {
-                self.eval(plan, ld, false);
-                self.lu_valid = false;
-                return (SolveStatus::Stalled, it);
-            };
-            self.accept(alpha);
-            if alpha < 1.0 {
-                // far from the solution: do not reuse this Jacobian
-                self.lu_valid = false;
-            }
+        let mut problem = Nodes {
+            m: self,
+            plan,
+            ld,
+            tol,
+        };
+        let out = chord_newton(&mut problem, max_jacobians);
+        self.fresh = out.jacobians;
+        (out.end.into(), out.iterations)
+    }
+}
+
+/// The node unknowns' system at fixed loads, as [`chord_newton`] drives it.
+struct Nodes<'a> {
+    m: &'a mut Multi,
+    plan: &'a Plan,
+    ld: LoadCtx<'a>,
+    /// Converged at `max_abs(res) <= tol`.
+    tol: f64,
+}
+
+impl ChordNewton for Nodes<'_> {
+    fn test(&mut self) -> Test {
+        if max_abs(&self.m.res) <= self.tol {
+            Test::Converged
+        } else {
+            Test::Step
         }
     }
 
-    /// Take the trial point (reached by `alpha dx`) as the current one.
-    fn accept(&mut self, alpha: f64) {
-        std::mem::swap(&mut self.nodes, &mut self.trial);
-        std::mem::swap(&mut self.res, &mut self.res_trial);
-        for (m, d) in self.moved.iter_mut().zip(&self.dx) {
-            *m += alpha * d;
+    fn jacobian_ok(&mut self) -> &mut bool {
+        &mut self.m.lu_valid
+    }
+
+    fn jacobian(&mut self) -> bool {
+        self.m.jacobian(self.plan, self.ld)
+    }
+
+    fn factor(&mut self) -> Option<f64> {
+        self.m.lu.factor()
+    }
+
+    fn step(&mut self, _fresh: bool) {
+        let m = &mut *self.m;
+        for i in 0..m.n_unknowns() {
+            m.dx[i] = -m.res[i];
         }
+        m.lu.solve_in_place(&mut m.dx);
+    }
+
+    fn norm(&self) -> f64 {
+        norm2(&self.m.res)
+    }
+
+    fn trial(&mut self, alpha: f64) -> Option<f64> {
+        self.m.step_into(self.plan, alpha, true);
+        let ok = self.m.eval(self.plan, self.ld, true);
+        ok.then(|| norm2(&self.m.res_trial))
+    }
+
+    /// Take the trial point (reached by `alpha dx`) as the current one.
+    fn accept(&mut self, alpha: f64, _fresh: bool) {
+        let m = &mut *self.m;
+        std::mem::swap(&mut m.nodes, &mut m.trial);
+        std::mem::swap(&mut m.res, &mut m.res_trial);
+        for (moved, d) in m.moved.iter_mut().zip(&m.dx) {
+            *moved += alpha * d;
+        }
+    }
+
+    fn restore(&mut self) {
+        self.m.eval(self.plan, self.ld, false);
     }
 }
 

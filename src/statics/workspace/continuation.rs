@@ -2,6 +2,7 @@
 //! warm solves and Jacobi's test for conjugate points.
 
 use super::*;
+use crate::math::newton::MIN_RCOND;
 use crate::math::step::StepRule;
 
 /// Newton iterations a cold start gets before continuation takes over.
@@ -263,7 +264,7 @@ impl Workspace {
             return Err(SolveStatus::NonFinite);
         }
         match self.lu.factor() {
-            Some(rc) if rc > 1e-14 => self.lu_valid = true,
+            Some(rc) if rc > MIN_RCOND => self.lu_valid = true,
             _ => return Err(SolveStatus::IllConditioned),
         }
         self.dx.copy_from_slice(&self.res);

@@ -2,7 +2,7 @@
 //! line search and the f64 evaluations it needs.
 
 use super::*;
-use crate::math::newton::{backtrack, CHORD_CONTRACTION, MAX_CHORD_STEPS};
+use crate::math::newton::{chord_newton, ChordNewton, Test};
 
 impl Workspace {
     /// Condensed coupling: sweeps over `[x (; theta)]` in chunks of six outer
@@ -137,111 +137,22 @@ impl Workspace {
         }
     }
 
-    /// Newton at load scale `lam` from the current `x`.
+    /// Newton at load scale `lam` from the current `x` ([`chord_newton`]).
     ///
     /// The Jacobian is exact (dual numbers) where it is evaluated, and is reused for
     /// further full steps while they contract the residual by at least
-    /// [`CHORD_CONTRACTION`] (the chord method; warm starts reuse the previous solve's
-    /// factorisation). A fresh Jacobian's step gets a backtracking line search on
-    /// `||r||_2`; a stale one that does not contract is discarded and refreshed.
+    /// [`crate::math::newton::CHORD_CONTRACTION`] (the chord method, with Broyden's
+    /// update when `use_broyden`; warm starts reuse the previous solve's
+    /// factorisation). A fresh Jacobian's step gets a backtracking line search.
     pub(super) fn newton(&mut self, lam: f64, max_iterations: usize) -> (SolveStatus, usize) {
-        let n = self.plan.n_unknowns;
         self.first_taken = false;
         if !self.eval_at(false, lam) {
             self.res.iter_mut().for_each(|r| *r = f64::INFINITY);
             return (SolveStatus::NonFinite, 0);
         }
         self.tip_start = self.tip;
-        let mut it = 0;
-        let mut jacobians = 0;
-        let mut chord_steps = 0;
-        loop {
-            if lam == 1.0 && max_abs(&self.res) < self.best_res {
-                self.best_res = max_abs(&self.res);
-                self.x_best.copy_from_slice(&self.x);
-            }
-            if self.status_here(SolveStatus::Converged).is_converged() {
-                if self.b64.local_tol <= LOCAL_TOL {
-                    return (self.status_here(SolveStatus::Converged), it);
-                }
-                // confirm with fully settled segments (condensed coupling)
-                self.b64.local_tol = LOCAL_TOL;
-                if !self.eval_at(false, lam) {
-                    return (self.status_here(SolveStatus::NonFinite), it);
-                }
-                continue;
-            }
-            if chord_steps >= MAX_CHORD_STEPS {
-                self.lu_valid = false;
-            }
-            // inexact inner solves while far away: 1e-10 of the outer residual,
-            // between LOCAL_TOL and 1e-9 (full accuracy once res < 1e-3)
-            self.b64.local_tol = self.settle_tolerance(1e-10 * max_abs(&self.res));
-            let fresh = !self.lu_valid;
-            if fresh && jacobians >= max_iterations {
-                return (self.status_here(SolveStatus::MaxIterations), it);
-            }
-            it += 1;
-            if fresh {
-                jacobians += 1;
-                chord_steps = 0;
-                if !self.jacobian(lam) {
-                    return (self.status_here(SolveStatus::NonFinite), it);
-                }
-                match self.lu.factor() {
-                    Some(rc) if rc > 1e-14 => self.lu_valid = true,
-                    _ => return (self.status_here(SolveStatus::IllConditioned), it),
-                }
-            }
-            if fresh || !self.use_broyden {
-                for i in 0..n {
-                    self.dx[i] = -self.res[i];
-                }
-                self.lu.solve_in_place(&mut self.dx);
-            } else {
-                // the reused Jacobian's inverse with the Broyden updates so far
-                self.broyden.sync(&self.lu);
-                self.broyden.step(&self.res, &mut self.dx);
-            }
-            let f0 = norm2(&self.res);
-            if !fresh {
-                for i in 0..n {
-                    self.x_trial[i] = self.x[i] + self.dx[i];
-                }
-                chord_steps += 1;
-                if self.eval_trial(lam) && norm2(&self.b64.res) < CHORD_CONTRACTION * f0 {
-                    if self.use_broyden {
-                        self.broyden.update(&self.dx, &self.res, &self.b64.res);
-                    }
-                    std::mem::swap(&mut self.x, &mut self.x_trial);
-                    self.res.copy_from_slice(&self.b64.res);
-                    self.noise.record(&self.x, lam, self.b64.local_tol);
-                    self.note_first_step();
-                } else {
-                    self.lu_valid = false;
-                }
-                continue;
-            }
-            let found = backtrack(f0, |alpha| {
-                for i in 0..n {
-                    self.x_trial[i] = self.x[i] + alpha * self.dx[i];
-                }
-                self.eval_trial(lam).then(|| norm2(&self.b64.res))
-            });
-            let Some(alpha) = found else {
-                self.eval_at(false, lam);
-                self.lu_valid = false;
-                return (self.status_here(SolveStatus::Stalled), it);
-            };
-            std::mem::swap(&mut self.x, &mut self.x_trial);
-            self.res.copy_from_slice(&self.b64.res);
-            self.noise.record(&self.x, lam, self.b64.local_tol);
-            self.note_first_step();
-            if alpha < 1.0 {
-                // far from the solution: the Jacobian changes quickly, do not reuse it
-                self.lu_valid = false;
-            }
-        }
+        let out = chord_newton(&mut AtScale { ws: self, lam }, max_iterations);
+        (self.status_here(out.end.into()), out.iterations)
     }
 
     /// Residual at `x_trial` into `b64.res`; `false` when the pass failed.
@@ -275,5 +186,97 @@ fn src_of<'a>(trial: bool, x: &'a [f64], x_trial: &'a [f64]) -> &'a [f64] {
         x_trial
     } else {
         x
+    }
+}
+
+/// The shooting problem at load scale `lam`, as [`chord_newton`] drives it.
+struct AtScale<'a> {
+    ws: &'a mut Workspace,
+    lam: f64,
+}
+
+impl ChordNewton for AtScale<'_> {
+    /// Converged by [`Workspace::status_here`]; with loosely settled segments
+    /// (condensed coupling) confirmed at fully settled ones first. Also keeps the
+    /// best point at full load.
+    fn test(&mut self) -> Test {
+        let (ws, lam) = (&mut *self.ws, self.lam);
+        if lam == 1.0 && max_abs(&ws.res) < ws.best_res {
+            ws.best_res = max_abs(&ws.res);
+            ws.x_best.copy_from_slice(&ws.x);
+        }
+        if !ws.status_here(SolveStatus::Converged).is_converged() {
+            Test::Step
+        } else if ws.b64.local_tol <= LOCAL_TOL {
+            Test::Converged
+        } else {
+            ws.b64.local_tol = LOCAL_TOL;
+            if ws.eval_at(false, lam) {
+                Test::Recheck
+            } else {
+                Test::Failed
+            }
+        }
+    }
+
+    fn jacobian_ok(&mut self) -> &mut bool {
+        &mut self.ws.lu_valid
+    }
+
+    /// Inexact inner solves while far away: 1e-10 of the outer residual, between
+    /// `LOCAL_TOL` and 1e-9 (full accuracy once `res < 1e-3`).
+    fn prepare(&mut self) {
+        let ws = &mut *self.ws;
+        ws.b64.local_tol = ws.settle_tolerance(1e-10 * max_abs(&ws.res));
+    }
+
+    fn jacobian(&mut self) -> bool {
+        self.ws.jacobian(self.lam)
+    }
+
+    fn factor(&mut self) -> Option<f64> {
+        self.ws.lu.factor()
+    }
+
+    /// A chord step with `use_broyden` uses the reused Jacobian's inverse with the
+    /// Broyden updates so far.
+    fn step(&mut self, fresh: bool) {
+        let ws = &mut *self.ws;
+        if fresh || !ws.use_broyden {
+            for i in 0..ws.plan.n_unknowns {
+                ws.dx[i] = -ws.res[i];
+            }
+            ws.lu.solve_in_place(&mut ws.dx);
+        } else {
+            ws.broyden.sync(&ws.lu);
+            ws.broyden.step(&ws.res, &mut ws.dx);
+        }
+    }
+
+    fn norm(&self) -> f64 {
+        norm2(&self.ws.res)
+    }
+
+    fn trial(&mut self, alpha: f64) -> Option<f64> {
+        let ws = &mut *self.ws;
+        for i in 0..ws.plan.n_unknowns {
+            ws.x_trial[i] = ws.x[i] + alpha * ws.dx[i];
+        }
+        ws.eval_trial(self.lam).then(|| norm2(&ws.b64.res))
+    }
+
+    fn accept(&mut self, _alpha: f64, fresh: bool) {
+        let ws = &mut *self.ws;
+        if !fresh && ws.use_broyden {
+            ws.broyden.update(&ws.dx, &ws.res, &ws.b64.res);
+        }
+        std::mem::swap(&mut ws.x, &mut ws.x_trial);
+        ws.res.copy_from_slice(&ws.b64.res);
+        ws.noise.record(&ws.x, self.lam, ws.b64.local_tol);
+        ws.note_first_step();
+    }
+
+    fn restore(&mut self) {
+        self.ws.eval_at(false, self.lam);
     }
 }

@@ -3,6 +3,7 @@
 
 use super::super::pass::cable_length;
 use super::*;
+use crate::math::newton::MIN_RCOND;
 
 impl Workspace {
     /// Exact sensitivities of the cable lengths to `theta` at the current (converged)
@@ -73,7 +74,7 @@ impl Workspace {
             a[r * n..(r + 1) * n].copy_from_slice(&self.sens_s[r * w..r * w + n]);
         }
         match self.lu.factor() {
-            Some(rc) if rc > 1e-14 => self.lu_valid = true,
+            Some(rc) if rc > MIN_RCOND => self.lu_valid = true,
             _ => {
                 self.lu_valid = false;
                 return false;

@@ -5,6 +5,7 @@
 //! [`super::TendonSettings::joint_newton`] is off.
 
 use super::TendonWorkspace;
+use crate::math::newton::{halve, CHORD_CONTRACTION};
 use crate::statics::{SolveStatus, Start};
 
 impl TendonWorkspace {
@@ -22,8 +23,12 @@ impl TendonWorkspace {
         }
         let mut merit = self.merit();
         // a fresh Jacobian (sweep at the current point) for the first step, after a
-        // failed step, a step that contracted |G| by less than 10x, or a change of the
-        // active set; otherwise a chord step reuses the last factorisation
+        // failed step, a step that contracted |G| by less than 10x
+        // (`CHORD_CONTRACTION`), or a change of the active set; otherwise a chord
+        // step reuses the last factorisation. Not `math::newton::chord_newton`: a
+        // chord step that decreases |G| at all is taken (there it is rejected unless
+        // it contracts), chord steps are not capped, the limit is on passes (there on
+        // fresh Jacobians), and the merit is max |G|, not ||G||_2
         let mut need_fresh = true;
         for it in 0..self.tendon_settings().max_iterations {
             self.report.iterations = it;
@@ -67,26 +72,24 @@ impl TendonWorkspace {
             // projected backtracking line search on max |G| (a chord step gets one
             // trial: if it needs damping, the step is redone with a fresh Jacobian)
             self.t_trial.copy_from_slice(&self.t);
-            let mut alpha = 1.0;
-            let mut accepted = false;
-            for _ in 0..12 {
+            let accepted = halve(if fresh { 12 } else { 1 }, |alpha| {
                 for i in 0..p {
                     self.t[i] = (self.t_trial[i] + alpha * self.step[i]).max(0.0);
                 }
-                if self.evaluate(Start::Warm, false) {
-                    let m = self.merit();
-                    if m < merit || m <= self.tendon_settings().tolerance_m {
-                        merit = m;
-                        accepted = true;
-                        break;
-                    }
+                if !self.evaluate(Start::Warm, false) {
+                    return false;
                 }
-                if !fresh {
-                    break;
+                let m = self.merit();
+                let decrease = m < merit || m <= self.tendon_settings().tolerance_m;
+                if decrease {
+                    merit = m;
                 }
-                alpha *= 0.5;
-            }
-            need_fresh = !accepted || merit > 0.1 * merit_before || self.taut != self.taut_before;
+                decrease
+            })
+            .is_some();
+            need_fresh = !accepted
+                || merit > CHORD_CONTRACTION * merit_before
+                || self.taut != self.taut_before;
             if !accepted {
                 // back to the last point; a failed chord step retries with a fresh
                 // Jacobian there, a failed Newton step has nowhere to go

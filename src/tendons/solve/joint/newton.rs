@@ -1,9 +1,14 @@
 //! The joint path's semi-smooth Newton iteration (module docs of `joint`): fresh
 //! and chord steps on `[x; T]`, the line search on the merit, and the chord retry
-//! with a Broyden-updated inverse.
+//! with a Broyden-updated inverse. Not `math::newton::chord_newton`: a failed chord
+//! step gives way to a fresh Jacobian within the same iteration (there, at the next
+//! one), is first retried with the Broyden-updated inverse, a fresh step's line
+//! search may switch the active set and restart at the full step, and the limit is
+//! on iterations, not fresh Jacobians; it shares the Armijo constant.
 
 use super::super::TendonWorkspace;
 use super::{ChordPolicy, CHORD_PROBE, JOINT_MAX_ITERATIONS};
+use crate::math::newton::ARMIJO_SLOPE;
 use crate::statics::{SolveStatus, LOCAL_TOL};
 
 impl TendonWorkspace {
@@ -130,7 +135,7 @@ impl TendonWorkspace {
                     if let Some(m) = self.joint_evaluate() {
                         evaluated = true;
                         let enough = if fresh || alpha < 1.0 {
-                            (1.0 - 1e-4 * alpha) * l2_before
+                            (1.0 - ARMIJO_SLOPE * alpha) * l2_before
                         } else {
                             policy.contraction * l2_before
                         };
