@@ -2,9 +2,9 @@
 //! synthesised with section moduli 52 and 68 GPa, marker (1.5, -1, 6) mm, 0.1 mm
 //! noise): the recording mode fits the first 40 rows, validates on the other 20 and
 //! writes a calibrated scene (moduli within 1 % of the truth, marker offset within
-//! 0.5 mm), a residual CSV (one line per row) and an SVG with the three views; the
-//! same data read in the wrong unit fails as a unit mismatch; the thesis mode still
-//! fits table 4.1.
+//! 0.5 mm), a residual CSV (one line per row) and an SVG with the three views and a
+//! dot per row in each panel; the same data read in the wrong unit fails as a unit
+//! mismatch; the thesis mode still fits table 4.1.
 
 use cablesense::Scene;
 use std::path::PathBuf;
@@ -78,6 +78,12 @@ fn recording_mode_writes_a_calibrated_scene_residuals_and_report() {
     ] {
         assert!(svg.contains(v), "{v}");
     }
+    // a dot per row in each of the three views and the two error panels, one model
+    // line per split in each view, no NaN
+    let doc = roxmltree::Document::parse(&svg).expect("well-formed SVG");
+    let count = |tag: &str| doc.descendants().filter(|n| n.has_tag_name(tag)).count();
+    assert_eq!((count("circle"), count("path")), (60 * 5, 3 * 2));
+    assert!(!svg.contains("NaN"));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["params"].as_array().unwrap().len(), 11);

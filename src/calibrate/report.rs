@@ -3,12 +3,11 @@
 //! (measured and model marker paths in three orthographic views with equal axes,
 //! the error histogram, error over time, error against one input column).
 //!
-//! The SVG is written by hand with sub-pixel coordinates (plotters' SVG backend
-//! rounds to whole pixels, which turns mm-scale paths into staircases).
+//! The SVG is drawn with the project's plot stack ([`crate::files::svg`]).
 
 use super::fit::{CalibrationReport, RowResult, Split};
 use super::CalibrationError;
-use crate::files::svg::escape;
+use crate::files::svg::{extent, Axis, Doc, Panel};
 use crate::files::Scene;
 use crate::scene::calibration::{CalibrationSpec, TransformSpec};
 use crate::scene::{set_params, ParamPath};
@@ -125,173 +124,13 @@ const TRAIN: &str = "#1f77b4";
 const VAL: &str = "#2ca02c";
 const MODEL: &str = "#d62728";
 
-/// A plot panel: a pixel rectangle and a data box mapped onto it.
-struct Panel {
-    x0: f64,
-    y0: f64,
-    w: f64,
-    h: f64,
-    lo: (f64, f64),
-    hi: (f64, f64),
-}
-
-impl Panel {
-    fn new(x0: f64, y0: f64, w: f64, h: f64, lo: (f64, f64), hi: (f64, f64)) -> Self {
-        let fix = |a: f64, b: f64| if b > a { (a, b) } else { (a - 0.5, a + 0.5) };
-        let (lx, hx) = fix(lo.0, hi.0);
-        let (ly, hy) = fix(lo.1, hi.1);
-        Self {
-            x0,
-            y0,
-            w,
-            h,
-            lo: (lx, ly),
-            hi: (hx, hy),
-        }
-    }
-    /// Equal axes: widen the shorter data range so one data unit is as long on both.
-    fn equal(x0: f64, y0: f64, w: f64, h: f64, lo: (f64, f64), hi: (f64, f64)) -> Self {
-        let (dx, dy) = ((hi.0 - lo.0).max(1e-9), (hi.1 - lo.1).max(1e-9));
-        let k = (dx / w).max(dy / h) * 1.05;
-        let (cx, cy) = (0.5 * (lo.0 + hi.0), 0.5 * (lo.1 + hi.1));
-        Self::new(
-            x0,
-            y0,
-            w,
-            h,
-            (cx - 0.5 * k * w, cy - 0.5 * k * h),
-            (cx + 0.5 * k * w, cy + 0.5 * k * h),
-        )
-    }
-    fn px(&self, x: f64) -> f64 {
-        self.x0 + (x - self.lo.0) / (self.hi.0 - self.lo.0) * self.w
-    }
-    fn py(&self, y: f64) -> f64 {
-        self.y0 + self.h - (y - self.lo.1) / (self.hi.1 - self.lo.1) * self.h
-    }
-    fn frame(&self, s: &mut String, title: &str, xlabel: &str, ylabel: &str) {
-        let _ = writeln!(
-            s,
-            r#"<rect x="{:.2}" y="{:.2}" width="{:.2}" height="{:.2}" fill="none" stroke="dimgray" stroke-width="0.8"/>"#,
-            self.x0, self.y0, self.w, self.h
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{:.2}" y="{:.2}" font-size="13" text-anchor="middle">{}</text>"#,
-            self.x0 + self.w / 2.0,
-            self.y0 - 8.0,
-            escape(title)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{:.2}" y="{:.2}" font-size="11" text-anchor="middle">{}</text>"#,
-            self.x0 + self.w / 2.0,
-            self.y0 + self.h + 32.0,
-            escape(xlabel)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{:.2}" y="{:.2}" font-size="11" text-anchor="middle" transform="rotate(-90 {:.2} {:.2})">{}</text>"#,
-            self.x0 - 40.0,
-            self.y0 + self.h / 2.0,
-            self.x0 - 40.0,
-            self.y0 + self.h / 2.0,
-            escape(ylabel)
-        );
-        for t in ticks(self.lo.0, self.hi.0) {
-            let x = self.px(t);
-            let _ = writeln!(
-                s,
-                r#"<line x1="{x:.2}" y1="{:.2}" x2="{x:.2}" y2="{:.2}" stroke="dimgray" stroke-width="0.6"/><text x="{x:.2}" y="{:.2}" font-size="9" text-anchor="middle">{}</text>"#,
-                self.y0 + self.h,
-                self.y0 + self.h + 4.0,
-                self.y0 + self.h + 14.0,
-                fmt_tick(t)
-            );
-        }
-        for t in ticks(self.lo.1, self.hi.1) {
-            let y = self.py(t);
-            let _ = writeln!(
-                s,
-                r#"<line x1="{:.2}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}" stroke="dimgray" stroke-width="0.6"/><text x="{:.2}" y="{:.2}" font-size="9" text-anchor="end">{}</text>"#,
-                self.x0 - 4.0,
-                self.x0,
-                self.x0 - 6.0,
-                y + 3.0,
-                fmt_tick(t)
-            );
-        }
-    }
-    fn polyline(&self, s: &mut String, pts: &[(f64, f64)], color: &str, width: f64) {
-        if pts.is_empty() {
-            return;
-        }
-        let mut d = String::new();
-        for (i, (x, y)) in pts.iter().enumerate() {
-            let _ = write!(
-                d,
-                "{}{:.2},{:.2}",
-                if i == 0 { "M" } else { " L" },
-                self.px(*x),
-                self.py(*y)
-            );
-        }
-        let _ = writeln!(
-            s,
-            r#"<path d="{d}" fill="none" stroke="{color}" stroke-width="{width}" stroke-opacity="0.85"/>"#
-        );
-    }
-    fn dots(&self, s: &mut String, pts: &[(f64, f64)], color: &str) {
-        for (x, y) in pts {
-            let _ = writeln!(
-                s,
-                r#"<circle cx="{:.2}" cy="{:.2}" r="1.6" fill="{color}" fill-opacity="0.7"/>"#,
-                self.px(*x),
-                self.py(*y)
-            );
-        }
-    }
-}
-
-/// About 5 round tick values covering `[lo, hi]`.
-fn ticks(lo: f64, hi: f64) -> Vec<f64> {
-    let span = hi - lo;
-    if span.is_nan() || span <= 0.0 || !span.is_finite() {
-        return vec![lo];
-    }
-    let step = crate::files::svg::nice_step(span / 5.0);
-    let mut t = (lo / step).ceil() * step;
-    let mut out = Vec::new();
-    while t <= hi + 1e-9 * step && out.len() < 20 {
-        out.push(if t.abs() < 1e-12 * step { 0.0 } else { t });
-        t += step;
-    }
-    out
-}
-
-fn fmt_tick(t: f64) -> String {
-    let a = t.abs();
-    if a != 0.0 && !(1e-3..1e5).contains(&a) {
-        format!("{t:.1e}")
-    } else {
-        let s = format!("{t:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    }
-}
-
+/// Bounds of the points with both coordinates finite, `((0, 0), (1, 1))` when none.
 fn bounds(pts: impl Iterator<Item = (f64, f64)>) -> ((f64, f64), (f64, f64)) {
-    let mut lo = (f64::INFINITY, f64::INFINITY);
-    let mut hi = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-    for (x, y) in pts {
-        if x.is_finite() && y.is_finite() {
-            lo = (lo.0.min(x), lo.1.min(y));
-            hi = (hi.0.max(x), hi.1.max(y));
-        }
+    let p: Vec<(f64, f64)> = pts.filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
+    match (extent(p.iter().map(|p| p.0)), extent(p.iter().map(|p| p.1))) {
+        (Some(x), Some(y)) => ((x.0, y.0), (x.1, y.1)),
+        _ => ((0.0, 0.0), (1.0, 1.0)),
     }
-    if !lo.0.is_finite() {
-        return ((0.0, 0.0), (1.0, 1.0));
-    }
-    (lo, hi)
 }
 
 /// Write the SVG report of `report` to `path`.
@@ -313,13 +152,7 @@ fn mm(r: &RowResult) -> (f64, f64) {
 
 /// The SVG text of the report.
 fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
-    let (w, h) = (1260.0, 880.0);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif">"#
-    );
-    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+    let mut doc = Doc::new(1260.0, 880.0, 12.0);
     let len_mm = report.robot_length_m * 1e3;
     let line = |e: &super::stats::TipErrors, name: &str| {
         format!(
@@ -333,71 +166,63 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
             e.mean_removed.rmse_m * 1e3 / len_mm * 100.0
         )
     };
-    let _ = writeln!(
-        s,
-        r#"<text x="20" y="24" font-size="15">{}</text>"#,
-        escape(&opts.title)
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="20" y="44" font-size="11">{}</text>"#,
-        escape(&line(&report.train, "train"))
-    );
+    let small = r#"font-size="11""#;
+    doc.text(20.0, 24.0, &opts.title, r#"font-size="15""#);
+    doc.text(20.0, 44.0, &line(&report.train, "train"), small);
     if let Some(v) = &report.val {
-        let _ = writeln!(
-            s,
-            r#"<text x="20" y="60" font-size="11">{}</text>"#,
-            escape(&line(v, "val"))
-        );
+        doc.text(20.0, 60.0, &line(v, "val"), small);
     }
     if !report.failed_rows.is_empty() {
-        let _ = writeln!(
-            s,
-            r#"<text x="20" y="92" font-size="11" fill="{MODEL}">{}</text>"#,
-            escape(&format!(
-                "{} rows left out, their solve failed even from cold: {}",
-                report.failed_rows.len(),
-                super::FailedRow::list(&report.failed_rows, 12)
-            ))
+        let text = format!(
+            "{} rows left out, their solve failed even from cold: {}",
+            report.failed_rows.len(),
+            super::FailedRow::list(&report.failed_rows, 12)
+        );
+        doc.text(
+            20.0,
+            92.0,
+            &text,
+            &format!(r#"font-size="11" fill="{MODEL}""#),
         );
     }
-    let _ = writeln!(
-        s,
+    doc.raw(&format!(
         r#"<text x="20" y="76" font-size="11"><tspan fill="{TRAIN}">measured (train, dots)</tspan>  <tspan fill="{VAL}">measured (val, dots)</tspan>  <tspan fill="{MODEL}">model (line)</tspan>  (robot base frame, mm; errors are model - measured distances)</text>"#
-    );
+    ));
+    let splits = [(Split::Train, TRAIN), (Split::Val, VAL)];
     // three orthographic views
-    let views = [
+    for (v, (a, b, la, lb)) in [
         (0usize, 1usize, "x", "y"),
         (0, 2, "x", "z"),
         (1, 2, "y", "z"),
-    ];
-    for (v, (a, b, la, lb)) in views.iter().enumerate() {
-        let all = report.rows.iter().flat_map(|r| {
-            [
-                (r.measured_base_m[*a] * 1e3, r.measured_base_m[*b] * 1e3),
-                (r.model_base_m[*a] * 1e3, r.model_base_m[*b] * 1e3),
-            ]
-        });
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let at = |p: &nalgebra::Vector3<f64>| (p[a] * 1e3, p[b] * 1e3);
+        let all = report
+            .rows
+            .iter()
+            .flat_map(|r| [at(&r.measured_base_m), at(&r.model_base_m)]);
         let (lo, hi) = bounds(all);
-        let p = Panel::equal(70.0 + v as f64 * 410.0, 110.0, 340.0, 300.0, lo, hi);
-        p.frame(
-            &mut s,
-            &format!("{la}{lb} view"),
-            &format!("{la} (mm)"),
-            &format!("{lb} (mm)"),
+        let p = Panel::equal([70.0 + v as f64 * 410.0, 110.0, 340.0, 300.0], lo, hi);
+        let (title, xl, yl) = (
+            format!("{la}{lb} view"),
+            format!("{la} (mm)"),
+            format!("{lb} (mm)"),
         );
-        for (split, color) in [(Split::Train, TRAIN), (Split::Val, VAL)] {
-            let rows: Vec<&RowResult> = report.rows.iter().filter(|r| r.split == split).collect();
-            let meas: Vec<(f64, f64)> = rows
-                .iter()
-                .map(|r| (r.measured_base_m[*a] * 1e3, r.measured_base_m[*b] * 1e3))
-                .collect();
-            let model: Vec<(f64, f64)> = rows
-                .iter()
-                .map(|r| (r.model_base_m[*a] * 1e3, r.model_base_m[*b] * 1e3))
-                .collect();
-            p.dots(&mut s, &meas, color);
-            p.polyline(&mut s, &model, MODEL, 0.8);
+        p.frame(&mut doc, &title, &xl, &yl);
+        for (split, color) in splits {
+            let rows = report.rows.iter().filter(|r| r.split == split);
+            let meas: Vec<(f64, f64)> = rows.clone().map(|r| at(&r.measured_base_m)).collect();
+            let model: Vec<(f64, f64)> = rows.map(|r| at(&r.model_base_m)).collect();
+            p.dots(
+                &mut doc,
+                &meas,
+                1.6,
+                &format!(r#"fill="{color}" fill-opacity="0.7""#),
+            );
+            let style = format!(r#"stroke="{MODEL}" stroke-width="0.8" stroke-opacity="0.85""#);
+            p.polyline(&mut doc, &model, &style);
         }
     }
     // error histogram
@@ -410,25 +235,23 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
         counts[(r.split == Split::Val) as usize][b] += 1;
     }
     let cmax = counts.iter().flatten().copied().max().unwrap_or(1).max(1) as f64;
-    let p = Panel::new(70.0, 520.0, 340.0, 300.0, (0.0, 0.0), (emax, cmax * 1.05));
-    p.frame(&mut s, "error histogram", "error (mm)", "rows");
+    let p = Panel::new(
+        [70.0, 520.0, 340.0, 300.0],
+        Axis::linear(0.0, emax),
+        Axis::linear(0.0, cmax * 1.05),
+    );
+    p.frame(&mut doc, "error histogram", "error (mm)", "rows");
     for (k, color) in [(0usize, TRAIN), (1, VAL)] {
-        for (b, c) in counts[k].iter().enumerate() {
-            if *c == 0 {
-                continue;
-            }
-            let x0 = p.px(b as f64 * emax / nb as f64);
-            let x1 = p.px((b + 1) as f64 * emax / nb as f64);
-            let y = p.py(*c as f64);
-            let _ = writeln!(
-                s,
-                r#"<rect x="{x0:.2}" y="{y:.2}" width="{:.2}" height="{:.2}" fill="{color}" fill-opacity="0.45"/>"#,
-                (x1 - x0).max(0.1),
-                p.py(0.0) - y
+        for (b, c) in counts[k].iter().enumerate().filter(|(_, c)| **c > 0) {
+            let (x0, x1) = (
+                b as f64 * emax / nb as f64,
+                (b + 1) as f64 * emax / nb as f64,
             );
+            let style = format!(r#"fill="{color}" fill-opacity="0.45""#);
+            p.bar(&mut doc, (x0, x1), *c as f64, &style);
         }
     }
-    // error over time (or row order)
+    // error over time (or row order), and against an input
     let has_t = report.rows.iter().all(|r| r.t_s.is_some());
     let over: Vec<(Split, f64, f64)> = report
         .rows
@@ -443,23 +266,8 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
             (r.split, x, mm(r).1)
         })
         .collect();
-    let (lo, hi) = bounds(over.iter().map(|(_, x, y)| (*x, *y)));
-    let p = Panel::new(480.0, 520.0, 340.0, 300.0, (lo.0, 0.0), (hi.0, hi.1 * 1.05));
-    p.frame(
-        &mut s,
-        "error over time",
-        if has_t { "t (s)" } else { "row" },
-        "error (mm)",
-    );
-    for (split, color) in [(Split::Train, TRAIN), (Split::Val, VAL)] {
-        let pts: Vec<(f64, f64)> = over
-            .iter()
-            .filter(|(sp, _, _)| *sp == split)
-            .map(|(_, x, y)| (*x, *y))
-            .collect();
-        p.dots(&mut s, &pts, color);
-    }
-    // error against an input
+    let xlabel = if has_t { "t (s)" } else { "row" };
+    scatter(&mut doc, 480.0, &over, "error over time", xlabel);
     let k = opts
         .input
         .as_ref()
@@ -475,19 +283,39 @@ fn report_svg(report: &CalibrationReport, opts: &SvgOptions) -> String {
             .iter()
             .map(|r| (r.split, r.inputs[k], mm(r).1))
             .collect();
-        let (lo, hi) = bounds(pts.iter().map(|(_, x, y)| (*x, *y)));
-        let p = Panel::new(890.0, 520.0, 340.0, 300.0, (lo.0, 0.0), (hi.0, hi.1 * 1.05));
         let name = &report.input_names[k];
-        p.frame(&mut s, &format!("error against {name}"), name, "error (mm)");
-        for (split, color) in [(Split::Train, TRAIN), (Split::Val, VAL)] {
-            let sel: Vec<(f64, f64)> = pts
-                .iter()
-                .filter(|(sp, _, _)| *sp == split)
-                .map(|(_, x, y)| (*x, *y))
-                .collect();
-            p.dots(&mut s, &sel, color);
-        }
+        scatter(
+            &mut doc,
+            890.0,
+            &pts,
+            &format!("error against {name}"),
+            name,
+        );
     }
-    s.push_str("</svg>\n");
-    s
+    doc.finish()
+}
+
+/// A bottom-row panel at `x0` of the error (mm, from 0) against `x`, dots coloured
+/// by split.
+fn scatter(doc: &mut Doc, x0: f64, pts: &[(Split, f64, f64)], title: &str, xlabel: &str) {
+    let (lo, hi) = bounds(pts.iter().map(|(_, x, y)| (*x, *y)));
+    let p = Panel::new(
+        [x0, 520.0, 340.0, 300.0],
+        Axis::linear(lo.0, hi.0),
+        Axis::linear(0.0, hi.1 * 1.05),
+    );
+    p.frame(doc, title, xlabel, "error (mm)");
+    for (split, color) in [(Split::Train, TRAIN), (Split::Val, VAL)] {
+        let sel: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|(sp, _, _)| *sp == split)
+            .map(|(_, x, y)| (*x, *y))
+            .collect();
+        p.dots(
+            doc,
+            &sel,
+            1.6,
+            &format!(r#"fill="{color}" fill-opacity="0.7""#),
+        );
+    }
 }

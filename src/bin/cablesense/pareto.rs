@@ -13,8 +13,8 @@ use anyhow::Context;
 use cablesense::experiments::pareto::{self, ParetoRow, ParetoScene, ParetoSettings};
 use cablesense::experiments::{front, write, Progress};
 use cablesense::files::demo::DataRef;
+use cablesense::files::svg::{extent, Axis, Doc, Panel, Swatch};
 use indicatif::ProgressBar;
-use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -197,29 +197,30 @@ fn print_table(res: &ParetoScene) {
     }
 }
 
-fn family_style(family: &str) -> RGBColor {
+fn family_colour(family: &str) -> &'static str {
     match family {
-        "cc" => RGBColor(230, 120, 20),
-        "pcc" => RGBColor(40, 160, 60),
-        "kirchhoff" => RGBColor(40, 90, 220),
-        _ => RGBColor(200, 30, 60),
+        "cc" => "rgb(230,120,20)",
+        "pcc" => "rgb(40,160,60)",
+        "kirchhoff" => "rgb(40,90,220)",
+        _ => "rgb(200,30,60)",
     }
 }
 
 /// Three log-log panels, one marker per setting: tip error and cable error against
 /// warm solve time, and the estimate error against the time per estimator tick.
 fn chart(name: &str, rows: &[ParetoRow], path: &Path) -> anyhow::Result<()> {
-    let root = SVGBackend::new(path, (1800, 520)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let root = root.titled(
-        &format!(
-            "{name}: error against the reference vs time per forward solve and per estimator tick"
-        ),
-        ("sans-serif", 18),
-    )?;
-    let panels = root.split_evenly((1, 3));
+    let mut doc = Doc::new(1800.0, 520.0, 12.0);
+    let title = format!(
+        "{name}: error against the reference vs time per forward solve and per estimator tick"
+    );
+    doc.text(
+        900.0,
+        26.0,
+        &title,
+        r#"font-size="18" text-anchor="middle""#,
+    );
     let floor = 1e-15;
-    for (k, panel) in panels.iter().enumerate() {
+    for k in 0..3 {
         let pts: Vec<(f64, f64)> = rows
             .iter()
             .map(|r| match k {
@@ -237,36 +238,32 @@ fn chart(name: &str, rows: &[ParetoRow], path: &Path) -> anyhow::Result<()> {
         }
         let (x0, x1) = log_bounds(good.iter().map(|p| p.0));
         let (y0, y1) = log_bounds(good.iter().map(|p| p.1));
-        let mut chart = ChartBuilder::on(panel)
-            .caption(
-                match k {
-                    0 => "tip position error (m)",
-                    1 => "cable length error (m)",
-                    _ => "estimator: tip force error (N)",
-                },
-                ("sans-serif", 15),
-            )
-            .margin(10)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc(if k < 2 {
-                "warm solve time (us)"
-            } else {
-                "median time per estimator tick (us)"
-            })
-            .y_desc(if k < 2 {
-                "max error over the load sweep (m)"
-            } else {
-                "error at the end of the ramp (N)"
-            })
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()?;
+        let panel = Panel::new(
+            [90.0 + 600.0 * k as f64, 80.0, 480.0, 380.0],
+            Axis::log(x0, x1),
+            Axis::log(y0, y1),
+        );
+        let (caption, xdesc, ydesc) = match k {
+            0 => (
+                "tip position error (m)",
+                "warm solve time (us)",
+                "max error over the load sweep (m)",
+            ),
+            1 => (
+                "cable length error (m)",
+                "warm solve time (us)",
+                "max error over the load sweep (m)",
+            ),
+            _ => (
+                "estimator: tip force error (N)",
+                "median time per estimator tick (us)",
+                "error at the end of the ramp (N)",
+            ),
+        };
+        panel.frame(&mut doc, caption, xdesc, ydesc);
+        let mut legend = Vec::new();
         for fam in ["cc", "pcc", "kirchhoff", "cosserat"] {
-            let c = family_style(fam);
+            let c = family_colour(fam);
             let series: Vec<(f64, f64)> = rows
                 .iter()
                 .zip(&pts)
@@ -276,10 +273,8 @@ fn chart(name: &str, rows: &[ParetoRow], path: &Path) -> anyhow::Result<()> {
             if series.is_empty() {
                 continue;
             }
-            chart
-                .draw_series(series.iter().map(|p| Circle::new(*p, 4, c.filled())))?
-                .label(fam)
-                .legend(move |(x, y)| Circle::new((x + 8, y), 4, c.filled()));
+            panel.dots(&mut doc, &series, 4.0, &format!(r#"fill="{c}""#));
+            legend.push((Swatch::Dot, c, fam));
         }
         let f = front(&pts);
         let line: Vec<(f64, f64)> = f.iter().map(|&i| pts[i]).collect();
@@ -290,30 +285,18 @@ fn chart(name: &str, rows: &[ParetoRow], path: &Path) -> anyhow::Result<()> {
             }
             stairs.push(*p);
         }
-        chart
-            .draw_series(LineSeries::new(stairs, BLACK.stroke_width(1)))?
-            .label("Pareto front")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(1)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        panel.polyline(&mut doc, &stairs, r#"stroke="black" stroke-width="1""#);
+        legend.push((Swatch::Line, "black", "Pareto front"));
+        panel.legend(&mut doc, &legend, true);
     }
-    root.present()?;
+    std::fs::write(path, doc.finish())?;
     Ok(())
 }
 
 fn log_bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for x in v {
-        lo = lo.min(x);
-        hi = hi.max(x);
-    }
-    if !(lo.is_finite() && hi.is_finite()) {
+    let Some((lo, mut hi)) = extent(v) else {
         return (1e-1, 1e1);
-    }
+    };
     if hi <= lo * 1.01 {
         hi = lo * 10.0;
     }

@@ -1,15 +1,15 @@
-//! SVG figures of `validate` (plotters, SVG backend: text needs no system fonts).
+//! SVG figures of `validate` (`cablesense::files::svg`).
 
+use cablesense::files::svg::{extent, ramp, Axis, Doc, Figure, Item, LegendEntry, Marker, Panel};
+use cablesense::files::svg::{Swatch, Unit};
+use cablesense::nalgebra::Vector3;
 use cablesense::validation::Comparison;
-use plotters::prelude::*;
 use std::path::Path;
 
 /// Predicted backbones (x, y in cm) of every row over the observed and the
 /// thesis-predicted tip points: one `xy` view with equal axis scales, smooth paths
 /// with sub-pixel coordinates (`cablesense::files::svg`).
 pub fn backbones(c: &Comparison, title: &str, path: &Path) -> anyhow::Result<()> {
-    use cablesense::files::svg::{ramp, Figure, Item, LegendEntry, Marker, Unit};
-    use cablesense::nalgebra::Vector3;
     let mut fig = Figure::new(title, Unit::Cm, &[(0, 1)]);
     fig.panel_px = 820.0;
     let n = c.solutions.len();
@@ -53,8 +53,6 @@ pub fn backbones(c: &Comparison, title: &str, path: &Path) -> anyhow::Result<()>
 
 /// Cable length change against tip mass: observed, thesis model, ours.
 pub fn length_changes(c: &Comparison, title: &str, path: &Path) -> anyhow::Result<()> {
-    let root = SVGBackend::new(path, (700, 460)).into_drawing_area();
-    root.fill(&WHITE)?;
     let mass: Vec<f64> = c
         .rows
         .iter()
@@ -70,20 +68,10 @@ pub fn length_changes(c: &Comparison, title: &str, path: &Path) -> anyhow::Resul
             ]);
         }
     }
-    let (m0, m1) = bounds(&mass);
-    let (d0, d1) = bounds(&vals);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(52)
-        .build_cartesian_2d(m0..m1, d0..d1)?;
-    chart
-        .configure_mesh()
-        .x_desc("tip mass (g)")
-        .y_desc("cable length change (cm)")
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()?;
+    let mut doc = Doc::new(700.0, 460.0, 12.0);
+    doc.text(350.0, 26.0, title, r#"font-size="15" text-anchor="middle""#);
+    let panel = Panel::new([76.0, 48.0, 600.0, 350.0], padded(&mass), padded(&vals));
+    panel.frame(&mut doc, "", "tip mass (g)", "cable length change (cm)");
     let k = 0; // one tracked cable in the thesis tables
     let series = |f: fn(&cablesense::validation::LengthRow) -> f64| -> Vec<(f64, f64)> {
         c.rows
@@ -92,41 +80,31 @@ pub fn length_changes(c: &Comparison, title: &str, path: &Path) -> anyhow::Resul
             .map(|(r, m)| (*m, f(&r.lengths[k]) * 100.0))
             .collect()
     };
+    let (red, blue) = ("rgb(200,40,40)", "rgb(40,60,230)");
     let ours = series(|l| l.ours_delta);
+    panel.polyline(
+        &mut doc,
+        &ours,
+        &format!(r#"stroke="{red}" stroke-width="2""#),
+    );
+    panel.dots(&mut doc, &ours, 3.0, &format!(r#"fill="{red}""#));
     let thesis = series(|l| l.thesis_delta);
+    panel.crosses(&mut doc, &thesis, 6.0, r#"stroke="black" stroke-width="1""#);
     let obs = series(|l| l.observed_delta);
-    let red = RGBColor(200, 40, 40);
-    chart
-        .draw_series(LineSeries::new(ours.clone(), red.stroke_width(2)))?
-        .label("ours")
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red.stroke_width(2)));
-    chart.draw_series(ours.iter().map(|p| Circle::new(*p, 3, red.filled())))?;
-    chart
-        .draw_series(
-            thesis
-                .iter()
-                .map(|p| Cross::new(*p, 6, BLACK.stroke_width(1))),
-        )?
-        .label("thesis predicted")
-        .legend(|(x, y)| Cross::new((x + 10, y), 6, BLACK.stroke_width(1)));
-    let blue = RGBColor(40, 60, 230);
-    chart
-        .draw_series(obs.iter().map(|p| Circle::new(*p, 5, blue.filled())))?
-        .label("observed")
-        .legend(move |(x, y)| Circle::new((x + 10, y), 5, blue.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
+    panel.dots(&mut doc, &obs, 5.0, &format!(r#"fill="{blue}""#));
+    let legend = [
+        (Swatch::Line, red, "ours"),
+        (Swatch::Cross, "black", "thesis predicted"),
+        (Swatch::Dot, blue, "observed"),
+    ];
+    panel.legend(&mut doc, &legend, false);
+    std::fs::write(path, doc.finish())?;
     Ok(())
 }
 
-fn bounds(v: &[f64]) -> (f64, f64) {
-    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+/// A linear axis over the values, 5 % wider on each side.
+fn padded(v: &[f64]) -> Axis {
+    let (lo, hi) = extent(v.iter().copied()).unwrap_or((0.0, 1.0));
     let pad = 0.05 * (hi - lo).max(1e-9);
-    (lo - pad, hi + pad)
+    Axis::linear(lo - pad, hi + pad)
 }

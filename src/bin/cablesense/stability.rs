@@ -9,7 +9,7 @@ use cablesense::experiments::stability::{
     self, Outcome, RegionCell, StabilityMap, StabilitySettings,
 };
 use cablesense::experiments::write;
-use plotters::prelude::*;
+use cablesense::files::svg::Doc;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -81,11 +81,11 @@ fn summary(map: &StabilityMap) {
     }
 }
 
-fn colour(o: Outcome) -> RGBColor {
+fn colour(o: Outcome) -> &'static str {
     match o {
-        Outcome::Ok => RGBColor(90, 180, 90),
-        Outcome::Far => RGBColor(240, 170, 40),
-        Outcome::Failed => RGBColor(210, 50, 50),
+        Outcome::Ok => "rgb(90,180,90)",
+        Outcome::Far => "rgb(240,170,40)",
+        Outcome::Failed => "rgb(210,50,50)",
     }
 }
 
@@ -101,58 +101,46 @@ fn heat_map(map: &StabilityMap, path: &Path) -> anyhow::Result<()> {
             rows.push(key);
         }
     }
-    let (cell_w, cell_h, label_w, head_h) = (30i32, 16i32, 330i32, 48i32);
-    let ncol = 13i32;
-    let panel_w = ncol * cell_w + 20;
-    let width = (label_w + panel_w * dirs.len() as i32 + 20) as u32;
-    let height = (head_h + cell_h * rows.len() as i32 + 60) as u32;
-    let root = SVGBackend::new(path, (width, height)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let font = ("sans-serif", 11).into_font();
-    let small = ("sans-serif", 9).into_font();
-    root.draw(&Text::new(
+    let (cell_w, cell_h, label_w, head_h) = (30.0, 16.0, 330.0, 48.0);
+    let panel_w = 13.0 * cell_w + 20.0;
+    let width = label_w + panel_w * dirs.len() as f64 + 20.0;
+    let height = head_h + cell_h * rows.len() as f64 + 60.0;
+    let mut doc = Doc::new(width, height, 8.9);
+    // text is placed by its top edge: the baseline 0.76 font sizes lower
+    let (font, small) = ((r#""#, 6.8), (r#"font-size="7.3""#, 5.5));
+    doc.text(
+        10.0,
+        6.0 + font.1,
         "stability map: green = converged to the reference branch, orange = converged elsewhere (>5% L off; CC: model error), red = failed; number = iterations",
-        (10, 6),
-        font.clone(),
-    ))?;
+        font.0,
+    );
     for (r, (kind, m, s)) in rows.iter().enumerate() {
-        let y = head_h + r as i32 * cell_h;
-        root.draw(&Text::new(
-            format!("{}: {m} [{}]", kind.as_str(), s.as_str()),
-            (6, y + 3),
-            small.clone(),
-        ))?;
+        let y = head_h + r as f64 * cell_h;
+        let label = format!("{}: {m} [{}]", kind.as_str(), s.as_str());
+        doc.text(6.0, y + 3.0 + small.1, &label, small.0);
     }
     for (di, d) in dirs.iter().enumerate() {
-        let x0 = label_w + di as i32 * panel_w;
-        root.draw(&Text::new(d.name().to_string(), (x0, 22), font.clone()))?;
+        let x0 = label_w + di as f64 * panel_w;
+        doc.text(x0, 22.0 + font.1, d.name(), font.0);
         for (c, g) in d.grid().iter().enumerate() {
-            root.draw(&Text::new(
-                format!("{g}"),
-                (x0 + c as i32 * cell_w + 2, 36),
-                small.clone(),
-            ))?;
+            let x = x0 + c as f64 * cell_w + 2.0;
+            doc.text(x, 36.0 + small.1, &format!("{g}"), small.0);
         }
         for (r, (kind, m, s)) in rows.iter().enumerate() {
-            let y = head_h + r as i32 * cell_h;
+            let y = head_h + r as f64 * cell_h;
             for p in points
                 .iter()
                 .filter(|p| p.kind == *kind && &p.method == m && p.start == *s && p.dir == *d)
             {
-                let c = d.grid().iter().position(|g| *g == p.magnitude).unwrap_or(0) as i32;
+                let c = d.grid().iter().position(|g| *g == p.magnitude).unwrap_or(0) as f64;
                 let x = x0 + c * cell_w;
-                root.draw(&Rectangle::new(
-                    [(x, y), (x + cell_w - 1, y + cell_h - 1)],
-                    colour(p.outcome).filled(),
-                ))?;
-                root.draw(&Text::new(
-                    format!("{}", p.iterations),
-                    (x + 3, y + 3),
-                    small.clone(),
-                ))?;
+                let fill = format!(r#"fill="{}""#, colour(p.outcome));
+                doc.rect(x, y, cell_w - 1.0, cell_h - 1.0, &fill);
+                let iterations = format!("{}", p.iterations);
+                doc.text(x + 3.0, y + 3.0 + small.1, &iterations, small.0);
             }
         }
     }
-    root.present()?;
+    std::fs::write(path, doc.finish())?;
     Ok(())
 }

@@ -15,7 +15,7 @@ use cablesense::calibrate::{Recording, RigidTransform};
 use cablesense::command::{
     sample_workspace, Hull, SampleStatus, WorkspaceCloud, WorkspaceSettings,
 };
-use cablesense::files::svg::escape;
+use cablesense::files::svg::{Doc, Swatch};
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{column_map, TRAIN_CSV, VAL_CSV};
 use cablesense::Scene;
@@ -415,17 +415,8 @@ fn svg(title: &str, tips: &[Vector3<f64>], hull: &Hull, o: &Overlay) -> String {
     const PANEL: f64 = 420.0;
     const PAD: f64 = 36.0;
     let (w, h) = (2.0 * PANEL + 3.0 * PAD, 2.0 * PANEL + 3.0 * PAD + 90.0);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{PAD}" y="22" font-size="14">{}</text>"#,
-        escape(title)
-    );
+    let mut doc = Doc::new(w, h, 12.0);
+    doc.text(PAD, 22.0, title, r#"font-size="14""#);
     let (lo, hi) = hull.bounds();
     let centre = (lo + hi) * 0.5;
     let extent = (hi - lo).max() * 1.1;
@@ -449,10 +440,7 @@ fn svg(title: &str, tips: &[Vector3<f64>], hull: &Hull, o: &Overlay) -> String {
     for panel in 0..4 {
         let ox = PAD + (panel % 2) as f64 * (PANEL + PAD);
         let oy = 40.0 + (panel / 2) as f64 * (PANEL + PAD);
-        let _ = writeln!(
-            s,
-            r##"<rect x="{ox}" y="{oy}" width="{PANEL}" height="{PANEL}" fill="none" stroke="#888"/>"##
-        );
+        doc.rect(ox, oy, PANEL, PANEL, r##"fill="none" stroke="#888""##);
         let view = views.get(panel).copied();
         let project = |p: &Vector3<f64>| -> (f64, f64) {
             if let Some((_, i, j)) = view {
@@ -483,96 +471,63 @@ fn svg(title: &str, tips: &[Vector3<f64>], hull: &Hull, o: &Overlay) -> String {
         } else {
             "perspective (azimuth 45 deg, elevation 25 deg)".to_string()
         };
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}">{}</text>"#,
-            ox + 4.0,
-            oy + 14.0,
-            escape(&label)
-        );
+        doc.text(ox + 4.0, oy + 14.0, &label, "");
         let mut path = String::new();
         for &(a, b) in &edges {
             let (x0, y0) = project(&hull.vertices[a]);
             let (x1, y1) = project(&hull.vertices[b]);
             let _ = write!(path, "M{x0:.1} {y0:.1}L{x1:.1} {y1:.1}");
         }
-        let _ = writeln!(
-            s,
-            r##"<path d="{path}" stroke="#bbb" stroke-width="0.5" fill="none"/>"##
-        );
-        dots(&mut s, &drawn, &project, "#3b6fb6", 1.4, 0.6);
-        dots(&mut s, &o.recording, &project, "#e08a1e", 1.3, 0.8);
-        dots(&mut s, &o.val_inside, &project, "#2a9d3a", 1.6, 0.9);
-        dots(&mut s, &o.val_outside, &project, "#d62728", 2.2, 1.0);
-    }
-    let ly = 40.0 + 2.0 * (PANEL + PAD) + 4.0;
-    let legend = [
-        (
-            "#3b6fb6",
-            format!(
-                "model tips at the sampled readings ({} of {} drawn; all in cloud.csv); grey: edges of their convex hull (over-states a non-convex workspace)",
-                drawn.len(),
-                tips.len()
-            ),
-        ),
-        (
-            "#e08a1e",
-            format!(
-                "recording: measured markers, base frame ({} rows){}",
-                o.recording.len(),
-                if o.model_markers {
-                    "; its coverage is computed against the model's marker points"
-                } else {
-                    ""
+        doc.path(&path, r##"stroke="#bbb" stroke-width="0.5" fill="none""##);
+        for (pts, colour, r, opacity) in [
+            (&drawn, "#3b6fb6", 1.4, 0.6),
+            (&o.recording, "#e08a1e", 1.3, 0.8),
+            (&o.val_inside, "#2a9d3a", 1.6, 0.9),
+            (&o.val_outside, "#d62728", 2.2, 1.0),
+        ] {
+            if !pts.is_empty() {
+                doc.open(&format!(r#"fill="{colour}" fill-opacity="{opacity}""#));
+                for (x, y) in pts.iter().map(project) {
+                    doc.circle(x, y, r, "");
                 }
-            ),
+                doc.close();
+            }
+        }
+    }
+    let legend = [
+        format!(
+            "model tips at the sampled readings ({} of {} drawn; all in cloud.csv); grey: edges of their convex hull (over-states a non-convex workspace)",
+            drawn.len(),
+            tips.len()
         ),
-        (
-            "#2a9d3a",
-            format!(
-                "val rows inside the recording's hull ({})",
-                o.val_inside.len()
-            ),
+        format!(
+            "recording: measured markers, base frame ({} rows){}",
+            o.recording.len(),
+            if o.model_markers {
+                "; its coverage is computed against the model's marker points"
+            } else {
+                ""
+            }
         ),
-        (
-            "#d62728",
-            format!(
-                "val rows outside the recording's hull ({})",
-                o.val_outside.len()
-            ),
+        format!(
+            "val rows inside the recording's hull ({})",
+            o.val_inside.len()
+        ),
+        format!(
+            "val rows outside the recording's hull ({})",
+            o.val_outside.len()
         ),
     ];
-    for (k, (c, t)) in legend.iter().enumerate() {
-        let y = ly + 18.0 * k as f64;
-        let _ = writeln!(
-            s,
-            r#"<circle cx="{}" cy="{}" r="4" fill="{c}"/><text x="{}" y="{}">{}</text>"#,
-            PAD + 4.0,
-            y,
-            PAD + 14.0,
-            y + 4.0,
-            escape(t)
-        );
-    }
-    s.push_str("</svg>\n");
-    s
-}
-
-fn dots(
-    s: &mut String,
-    pts: &[Vector3<f64>],
-    project: &dyn Fn(&Vector3<f64>) -> (f64, f64),
-    colour: &str,
-    r: f64,
-    opacity: f64,
-) {
-    if pts.is_empty() {
-        return;
-    }
-    let _ = write!(s, r#"<g fill="{colour}" fill-opacity="{opacity}">"#);
-    for p in pts {
-        let (x, y) = project(p);
-        let _ = write!(s, r#"<circle cx="{x:.1}" cy="{y:.1}" r="{r}"/>"#);
-    }
-    s.push_str("</g>\n");
+    let entries: Vec<(Swatch, &str, &str)> = ["#3b6fb6", "#e08a1e", "#2a9d3a", "#d62728"]
+        .into_iter()
+        .zip(&legend)
+        .map(|(c, t)| (Swatch::Dot, c, t.as_str()))
+        .collect();
+    Swatch::list(
+        &mut doc,
+        PAD - 8.0,
+        40.0 + 2.0 * (PANEL + PAD) + 4.0,
+        &entries,
+    );
+    doc.finish()
 }

@@ -1,6 +1,5 @@
-//! SVG figures of robot shapes, written directly (no plotting backend): every
-//! coordinate keeps sub-pixel precision and curves are cubic Bezier paths, so
-//! backbones stay smooth at any zoom.
+//! Orthographic views of robot shapes: every coordinate keeps sub-pixel precision
+//! and curves are cubic Bezier paths, so backbones stay smooth at any zoom.
 //!
 //! A [`Figure`] holds 3D items ([`Item`]: smooth curves, straight polylines, markers)
 //! and a list of orthographic views (pairs of world axes, e.g. `xy`); every view
@@ -9,10 +8,10 @@
 //! of a solved robot (backbone, guide disks, cables) in the `xy`, `xz` and `yz`
 //! views; [`Figure::to_svg`] renders.
 
+use super::{cross_path, nice_step, smooth_path, straight_path, tick_label, ticks, Doc, Swatch};
 use crate::robot::Robot;
 use crate::statics::Solution;
 use nalgebra::{Matrix3, Vector3};
-use std::fmt::Write as _;
 
 /// Length unit of the axes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -290,21 +289,12 @@ impl Figure {
             .sum::<f64>()
             .max(360.0);
         let legend_h = 18.0 * self.legend.len() as f64;
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{:.0}" height="{:.0}" viewBox="0 0 {:.0} {:.0}" font-family="sans-serif" font-size="12">"#,
-            width,
-            height + legend_h,
-            width,
-            height + legend_h
-        );
-        let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-        let _ = writeln!(
-            s,
-            r#"<text x="{:.1}" y="22" font-size="16" text-anchor="middle">{}</text>"#,
+        let mut doc = Doc::new(width, height + legend_h, 12.0);
+        doc.text(
             width / 2.0,
-            escape(&self.title)
+            22.0,
+            &self.title,
+            r#"font-size="16" text-anchor="middle""#,
         );
         let mut x_off = 0.0;
         let k = self.unit.per_m();
@@ -318,45 +308,41 @@ impl Figure {
                 )
             };
             let name = format!("{}{}", AXIS[a], AXIS[b]);
-            let _ = writeln!(s, r#"<g id="view-{name}" class="view">"#);
-            let _ = writeln!(
-                s,
-                r#"<rect x="{ox:.2}" y="{oy:.2}" width="{w:.2}" height="{h:.2}" fill="none" stroke="black" stroke-width="0.8"/>"#
+            doc.open(&format!(r#"id="view-{name}" class="view""#));
+            doc.rect(
+                ox,
+                oy,
+                *w,
+                *h,
+                r#"fill="none" stroke="black" stroke-width="0.8""#,
             );
-            self.ticks(&mut s, bb, scale, (ox, oy, *w, *h), (AXIS[a], AXIS[b]));
-            let _ = writeln!(
-                s,
-                r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" font-size="13">{name} view</text>"#,
+            self.ticks(&mut doc, bb, scale, (ox, oy, *w, *h), (AXIS[a], AXIS[b]));
+            doc.text(
                 ox + w / 2.0,
-                oy - 8.0
+                oy - 8.0,
+                &format!("{name} view"),
+                r#"text-anchor="middle" font-size="13""#,
             );
             for item in &self.items {
-                draw(&mut s, item, &px);
+                draw(&mut doc, item, &px);
             }
-            let _ = writeln!(s, "</g>");
+            doc.close();
             x_off += w + 2.0 * MARGIN;
         }
-        for (i, l) in self.legend.iter().enumerate() {
-            let y = height + 18.0 * i as f64;
-            let _ = writeln!(
-                s,
-                r#"<line x1="{m:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="{}" stroke-width="2"/><text x="{:.1}" y="{:.1}">{}</text>"#,
-                MARGIN + 24.0,
-                l.colour,
-                MARGIN + 30.0,
-                y + 4.0,
-                escape(&l.label),
-                m = MARGIN
-            );
-        }
-        s.push_str("</svg>\n");
-        s
+        let entries: Vec<(Swatch, &str, &str)> = self
+            .legend
+            .iter()
+            .map(|l| (Swatch::Line, l.colour.as_str(), l.label.as_str()))
+            .collect();
+        Swatch::list(&mut doc, MARGIN, height, &entries);
+        doc.finish()
     }
 
-    /// Tick marks and labels on the left and bottom edges of a panel.
+    /// Tick marks and labels on the left and bottom edges of a panel: one step for
+    /// both axes (equal scales).
     fn ticks(
         &self,
-        s: &mut String,
+        doc: &mut Doc,
         bb: &[f64; 4],
         scale: f64,
         (ox, oy, w, h): (f64, f64, f64, f64),
@@ -364,79 +350,43 @@ impl Figure {
     ) {
         let step = nice_step((bb[1] - bb[0]).max(bb[3] - bb[2]) / 5.0);
         let unit = self.unit.name();
-        let mut u = (bb[0] / step).ceil() * step;
-        while u <= bb[1] {
+        for u in ticks(bb[0], bb[1], step) {
             let x = ox + (u - bb[0]) * scale;
-            let _ = writeln!(
-                s,
-                r#"<line x1="{x:.2}" y1="{:.2}" x2="{x:.2}" y2="{:.2}" stroke="black"/><text x="{x:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
-                oy + h,
-                oy + h + 4.0,
+            doc.line((x, oy + h), (x, oy + h + 4.0), r#"stroke="black""#);
+            doc.text(
+                x,
                 oy + h + 17.0,
-                label(u, step)
+                &tick_label(u, step),
+                r#"text-anchor="middle""#,
             );
-            u += step;
         }
-        let mut v = (bb[2] / step).ceil() * step;
-        while v <= bb[3] {
+        for v in ticks(bb[2], bb[3], step) {
             let y = oy + (bb[3] - v) * scale;
-            let _ = writeln!(
-                s,
-                r#"<line x1="{:.2}" y1="{y:.2}" x2="{ox:.2}" y2="{y:.2}" stroke="black"/><text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
-                ox - 4.0,
+            doc.line((ox - 4.0, y), (ox, y), r#"stroke="black""#);
+            doc.text(
                 ox - 6.0,
                 y + 4.0,
-                label(v, step)
+                &tick_label(v, step),
+                r#"text-anchor="end""#,
             );
-            v += step;
         }
-        let _ = writeln!(
-            s,
-            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{an} ({unit})</text>"#,
+        doc.text(
             ox + w / 2.0,
-            oy + h + 34.0
+            oy + h + 34.0,
+            &format!("{an} ({unit})"),
+            r#"text-anchor="middle""#,
         );
-        let _ = writeln!(
-            s,
-            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" transform="rotate(-90 {:.2} {:.2})">{bn} ({unit})</text>"#,
+        doc.text_up(
             ox - 40.0,
             oy + h / 2.0,
-            ox - 40.0,
-            oy + h / 2.0
+            &format!("{bn} ({unit})"),
+            r#"text-anchor="middle""#,
         );
     }
 }
 
-/// 1, 2 or 5 times a power of ten, at least `raw`: the tick spacing of every SVG
-/// chart the project writes (shape views, calibration report, workspace).
-pub fn nice_step(raw: f64) -> f64 {
-    let p = 10f64.powf(raw.max(1e-12).log10().floor());
-    [1.0, 2.0, 5.0, 10.0]
-        .into_iter()
-        .map(|m| m * p)
-        .find(|s| *s >= raw)
-        .unwrap_or(10.0 * p)
-}
-
-fn label(v: f64, step: f64) -> String {
-    let decimals = if step >= 1.0 {
-        0
-    } else {
-        (-step.log10().floor()) as usize
-    };
-    let v = if v.abs() < step * 1e-9 { 0.0 } else { v };
-    format!("{v:.decimals$}")
-}
-
-/// `t` as SVG/XML text (`&`, `<`, `>` escaped).
-pub fn escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
 /// One item in one view.
-fn draw(s: &mut String, item: &Item, px: &impl Fn(&Vector3<f64>) -> (f64, f64)) {
+fn draw(doc: &mut Doc, item: &Item, px: &impl Fn(&Vector3<f64>) -> (f64, f64)) {
     match item {
         Item::Curve {
             points,
@@ -445,33 +395,22 @@ fn draw(s: &mut String, item: &Item, px: &impl Fn(&Vector3<f64>) -> (f64, f64)) 
             closed,
         } => {
             let p: Vec<(f64, f64)> = points.iter().map(px).collect();
-            let d = smooth_path(&p, *closed);
-            if !d.is_empty() {
-                let _ = writeln!(
-                    s,
-                    r#"<path d="{d}" fill="none" stroke="{colour}" stroke-width="{width}" stroke-linejoin="round"/>"#
-                );
-            }
+            doc.path(
+                &smooth_path(&p, *closed),
+                &format!(
+                    r#"fill="none" stroke="{colour}" stroke-width="{width}" stroke-linejoin="round""#
+                ),
+            );
         }
         Item::Polyline {
             points,
             colour,
             width,
         } => {
-            let mut d = String::new();
-            for (i, q) in points.iter().map(px).enumerate() {
-                let _ = write!(
-                    d,
-                    "{}{:.2},{:.2} ",
-                    if i == 0 { 'M' } else { 'L' },
-                    q.0,
-                    q.1
-                );
-            }
-            let _ = writeln!(
-                s,
-                r#"<path d="{}" fill="none" stroke="{colour}" stroke-width="{width}"/>"#,
-                d.trim_end()
+            let p: Vec<(f64, f64)> = points.iter().map(px).collect();
+            doc.path(
+                &straight_path(&p),
+                &format!(r#"fill="none" stroke="{colour}" stroke-width="{width}""#),
             );
         }
         Item::Marker {
@@ -482,88 +421,12 @@ fn draw(s: &mut String, item: &Item, px: &impl Fn(&Vector3<f64>) -> (f64, f64)) 
         } => {
             let (x, y) = px(at);
             match shape {
-                Marker::Dot => {
-                    let _ = writeln!(
-                        s,
-                        r#"<circle cx="{x:.2}" cy="{y:.2}" r="{size}" fill="{colour}"/>"#
-                    );
-                }
-                Marker::Cross => {
-                    let _ = writeln!(
-                        s,
-                        r#"<path d="M{:.2},{:.2} L{:.2},{:.2} M{:.2},{:.2} L{:.2},{:.2}" stroke="{colour}" stroke-width="1.5"/>"#,
-                        x - size,
-                        y - size,
-                        x + size,
-                        y + size,
-                        x - size,
-                        y + size,
-                        x + size,
-                        y - size
-                    );
-                }
+                Marker::Dot => doc.circle(x, y, *size, &format!(r#"fill="{colour}""#)),
+                Marker::Cross => doc.path(
+                    &cross_path(x, y, *size),
+                    &format!(r#"stroke="{colour}" stroke-width="1.5""#),
+                ),
             }
         }
-    }
-}
-
-/// SVG path data of a Catmull-Rom spline through `p` as cubic Bezier segments
-/// (control points `p_i + (p_{i+1} - p_{i-1}) / 6`), coordinates to 1/100 px.
-/// Non-finite points split the curve.
-pub fn smooth_path(p: &[(f64, f64)], closed: bool) -> String {
-    let mut d = String::new();
-    let finite = |q: &(f64, f64)| q.0.is_finite() && q.1.is_finite();
-    for run in p.split(|q| !finite(q)) {
-        let n = run.len();
-        if n < 2 {
-            continue;
-        }
-        let at = |i: isize| -> (f64, f64) {
-            if closed {
-                run[i.rem_euclid(n as isize) as usize]
-            } else {
-                run[i.clamp(0, n as isize - 1) as usize]
-            }
-        };
-        let _ = write!(d, "M{:.2},{:.2}", run[0].0, run[0].1);
-        let segments = if closed { n } else { n - 1 };
-        for i in 0..segments as isize {
-            let (p0, p1, p2, p3) = (at(i - 1), at(i), at(i + 1), at(i + 2));
-            let c1 = (p1.0 + (p2.0 - p0.0) / 6.0, p1.1 + (p2.1 - p0.1) / 6.0);
-            let c2 = (p2.0 - (p3.0 - p1.0) / 6.0, p2.1 - (p3.1 - p1.1) / 6.0);
-            let _ = write!(
-                d,
-                " C{:.2},{:.2} {:.2},{:.2} {:.2},{:.2}",
-                c1.0, c1.1, c2.0, c2.1, p2.0, p2.1
-            );
-        }
-        if closed {
-            d.push_str(" Z");
-        }
-        d.push(' ');
-    }
-    d.trim_end().to_string()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The Bezier path passes through every point and keeps sub-pixel precision.
-    #[test]
-    fn smooth_path_interpolates() {
-        let p = [(0.0, 0.0), (10.25, 3.5), (20.0, 0.1)];
-        let d = smooth_path(&p, false);
-        assert!(d.starts_with("M0.00,0.00 C"), "{d}");
-        assert!(d.contains(" 10.25,3.50 C"), "{d}");
-        assert!(d.ends_with(" 20.00,0.10"), "{d}");
-        assert_eq!(smooth_path(&[(1.0, 1.0)], false), "");
-    }
-
-    #[test]
-    fn nice_steps() {
-        assert_eq!(nice_step(3.0), 5.0);
-        assert_eq!(nice_step(0.11), 0.2);
-        assert_eq!(nice_step(20.0), 20.0);
     }
 }
