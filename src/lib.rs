@@ -185,6 +185,8 @@ mod docs {
     struct SettingsMatrix;
     #[doc = include_str!("../docs/architecture.md")]
     struct Architecture;
+    #[doc = include_str!("../docs/plots.md")]
+    struct Plots;
     #[doc = include_str!("../docs/history.md")]
     struct History;
 }
