@@ -29,8 +29,10 @@ mod arc;
 mod auto;
 mod auto_readings;
 mod cc;
+mod dispatch;
 mod grid;
 mod kinematics;
+mod label;
 mod pcc;
 mod readings;
 mod rod;
@@ -42,8 +44,10 @@ pub use auto::{
 };
 pub use auto_readings::{choose_readings, probe_rows, PROBE_ROWS};
 pub use cc::{CcSettings, ConstantCurvature};
+pub(crate) use dispatch::{CurvatureModel, RungJob};
 pub use grid::{CurvatureRungs, LadderGrid, MassChoice};
 pub use kinematics::TendonKinematics;
+pub use label::{guide_mass_name, ADAPTIVE_MAX_STEPS, LABEL_SPELLINGS};
 pub use pcc::{PccSettings, PiecewiseConstantCurvature};
 pub use readings::{readings_ladder, ReadingsModel};
 pub use rod::RodRung;
@@ -51,7 +55,7 @@ pub use rod::RodRung;
 use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::robot::Robot;
-use crate::settings::{CableCoupling, GuideMass, Integrator, RodModel, SolverSettings};
+use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
 use crate::statics::{ParamSite, Pose, SolveStatus, Start};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -77,6 +81,14 @@ pub enum LadderError {
     /// The automatic choice was given no candidate rung or no probe load.
     #[error("no candidate rung: {0}")]
     NoCandidate(String),
+    /// A rung label that names no rung ([`Rung::from_label`]).
+    #[error("model label `{label}`: {why}; labels are {}", LABEL_SPELLINGS)]
+    Label {
+        /// The label as given.
+        label: String,
+        /// Which part is wrong and why.
+        why: String,
+    },
 }
 
 /// Counts and outcome of one ladder solve.
@@ -226,39 +238,6 @@ impl Rung {
         })
     }
 
-    /// Short label, e.g. `cc`, `pcc/point/8`, `kirchhoff/average/rk4-16`,
-    /// `cosserat/accurate/adaptive-1e-8`; a rod rung whose cable coupling is not the
-    /// default (`condensed`) ends in `/arc` or `/exact`
-    /// (`cosserat/point/rk4-10/arc`).
-    pub fn label(&self) -> String {
-        match self {
-            Self::ConstantCurvature(_) => "cc".into(),
-            Self::PiecewiseConstantCurvature(p) => {
-                format!(
-                    "pcc/{}/{}",
-                    guide_mass_name(p.guide_mass),
-                    p.pieces_per_section
-                )
-            }
-            Self::Rod(s) => {
-                let model = match s.rod_model {
-                    RodModel::Cosserat => "cosserat",
-                    RodModel::Kirchhoff => "kirchhoff",
-                };
-                let int = match s.integrator {
-                    Integrator::Rk4 { steps_per_section } => format!("rk4-{steps_per_section}"),
-                    Integrator::Adaptive { tol, .. } => format!("adaptive-{tol:.0e}"),
-                };
-                let coupling = match s.cable_coupling {
-                    CableCoupling::Condensed => "",
-                    CableCoupling::Arc => "/arc",
-                    CableCoupling::Exact => "/exact",
-                };
-                format!("{model}/{}/{int}{coupling}", guide_mass_name(s.guide_mass))
-            }
-        }
-    }
-
     /// Family name: `cc`, `pcc`, `kirchhoff` or `cosserat`.
     pub fn family(&self) -> &'static str {
         match self {
@@ -275,27 +254,6 @@ impl Rung {
             Self::Rod(s) => Some(s),
             _ => None,
         }
-    }
-
-    /// Build the model for `robot`.
-    pub fn build(&self, robot: &Robot) -> Result<Box<dyn ForwardModel>, LadderError> {
-        Ok(match self {
-            Self::ConstantCurvature(s) => Box::new(ConstantCurvature::new(robot.clone(), *s)?),
-            Self::PiecewiseConstantCurvature(s) => {
-                Box::new(PiecewiseConstantCurvature::new(robot.clone(), *s)?)
-            }
-            Self::Rod(s) => Box::new(RodRung::new(robot.clone(), s.clone())?),
-        })
-    }
-}
-
-/// Scene-file spelling of a guide-mass model.
-pub fn guide_mass_name(g: GuideMass) -> &'static str {
-    match g {
-        GuideMass::None => "none",
-        GuideMass::Average => "average",
-        GuideMass::Accurate => "accurate",
-        GuideMass::Point => "point",
     }
 }
 
