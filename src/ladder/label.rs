@@ -267,8 +267,9 @@ mod tests {
         }
     }
 
-    /// Every rung of every named ladder on every shipped scene (data/scenes and
-    /// data/thesis): read back from its label it is the same rung, so its label too.
+    /// Every rung of every named ladder on every shipped scene (data/scenes and the
+    /// thesis tables' scenes, data/thesis/table_*.toml): read back from its label it
+    /// is the same rung, so its label too.
     #[test]
     fn every_ladder_rung_reads_back_from_its_label() {
         let grids = [
@@ -285,6 +286,8 @@ mod tests {
                 .expect("shipped data")
                 .map(|e| e.expect("entry").path())
                 .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                // data/thesis/fitted.toml holds fitted parameters, not a scene
+                .filter(|p| dir == "data/scenes" || p.to_string_lossy().contains("table_"))
                 .collect();
             paths.sort();
             for path in paths {

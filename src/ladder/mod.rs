@@ -23,13 +23,18 @@
 //! (readings -> one arc per section in closed form, [`TendonKinematics`]); PCC takes
 //! the same arcs per section; the rod rungs solve the tendon mechanics
 //! ([`crate::tendons::TendonWorkspace`]).
+//!
+//! **Labels and building.** [`Rung::label`] names a rung (`cc`, `pcc/point/8`,
+//! `cosserat/accurate/adaptive-1e-8`, ...) and [`Rung::from_label`] reads the name
+//! back (module `label`; `--model LABEL` on the command line). One match,
+//! `Rung::build_for`, turns a rung into its model; [`Rung::build`],
+//! [`Rung::build_readings`] and the estimator each adapt what it gives.
 
 mod anderson;
 mod arc;
 mod auto;
 mod auto_readings;
 mod cc;
-mod dispatch;
 mod grid;
 mod kinematics;
 mod label;
@@ -44,7 +49,6 @@ pub use auto::{
 };
 pub use auto_readings::{choose_readings, probe_rows, PROBE_ROWS};
 pub use cc::{CcSettings, ConstantCurvature};
-pub(crate) use dispatch::{CurvatureModel, RungJob};
 pub use grid::{CurvatureRungs, LadderGrid, MassChoice};
 pub use kinematics::TendonKinematics;
 pub use label::{guide_mass_name, ADAPTIVE_MAX_STEPS, LABEL_SPELLINGS};
@@ -254,6 +258,69 @@ impl Rung {
             Self::Rod(s) => Some(s),
             _ => None,
         }
+    }
+}
+
+/// What a curvature rung is to every job: a forward model with exact length
+/// sensitivities that readings can also drive, cloneable (an estimator keeps a copy
+/// of its model to fall back to).
+pub(crate) trait CurvatureModel: Differentiable + ReadingsModel + Clone + 'static {}
+
+impl<T: Differentiable + ReadingsModel + Clone + 'static> CurvatureModel for T {}
+
+/// One job's adapter from a rung's model ([`Rung::build_for`]).
+pub(crate) trait RungJob {
+    /// What the job makes of the rung.
+    type Output;
+    /// The job on a built curvature rung.
+    fn curvature<F: CurvatureModel>(self, model: F) -> Result<Self::Output, LadderError>;
+    /// The job on a rod rung of `robot` with these settings.
+    fn rod(self, robot: Robot, settings: &SolverSettings) -> Result<Self::Output, LadderError>;
+}
+
+impl Rung {
+    /// Build this rung of `robot` for `job`: the one place a rung becomes its model.
+    /// Each job adapts the result to what it needs: the forward model
+    /// ([`Rung::build`]), the readings model ([`Rung::build_readings`]) and the
+    /// estimator's model ([`crate::estimate::Estimator::on_rung`]).
+    ///
+    /// A curvature rung is one concrete model for every job (it is a
+    /// [`ForwardModel`], a [`Differentiable`] one and a [`ReadingsModel`]), so it is
+    /// built here. A rod rung is a different solver per job (the shooting
+    /// [`crate::statics::Workspace`] with or without load parameters, the tendon solve
+    /// [`crate::tendons::TendonWorkspace`]), so each job builds it from the rung's
+    /// [`SolverSettings`]. A new rung family whose model implements the three traits
+    /// is a new arm of this match and reaches every job with no other change.
+    pub(crate) fn build_for<J: RungJob>(
+        &self,
+        robot: Robot,
+        job: J,
+    ) -> Result<J::Output, LadderError> {
+        match self {
+            Self::ConstantCurvature(s) => job.curvature(ConstantCurvature::new(robot, *s)?),
+            Self::PiecewiseConstantCurvature(s) => {
+                job.curvature(PiecewiseConstantCurvature::new(robot, *s)?)
+            }
+            Self::Rod(s) => job.rod(robot, s),
+        }
+    }
+
+    /// Build the model for `robot`.
+    pub fn build(&self, robot: &Robot) -> Result<Box<dyn ForwardModel>, LadderError> {
+        self.build_for(robot.clone(), Forward)
+    }
+}
+
+/// The forward job: the rung as a [`ForwardModel`] (a rod rung is a [`RodRung`]).
+struct Forward;
+
+impl RungJob for Forward {
+    type Output = Box<dyn ForwardModel>;
+    fn curvature<F: CurvatureModel>(self, model: F) -> Result<Self::Output, LadderError> {
+        Ok(Box::new(model))
+    }
+    fn rod(self, robot: Robot, settings: &SolverSettings) -> Result<Self::Output, LadderError> {
+        Ok(Box::new(RodRung::new(robot, settings.clone())?))
     }
 }
 

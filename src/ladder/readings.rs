@@ -13,9 +13,8 @@
 //! --readings FILE --model auto`), and `cablesense pareto` charts them (its TDCR rows,
 //! module `crate::experiments`).
 
-use super::dispatch::{CurvatureModel, RungJob};
 use super::{ConstantCurvature, LadderError, LadderReport};
-use super::{PiecewiseConstantCurvature, Rung};
+use super::{CurvatureModel, PiecewiseConstantCurvature, Rung, RungJob};
 use crate::loads::Loads;
 use crate::robot::Robot;
 use crate::settings::SolverSettings;
@@ -107,7 +106,7 @@ impl Rung {
     }
 }
 
-/// The readings job ([`super::dispatch`]): a rod rung is a [`TendonWorkspace`].
+/// The readings job ([`Rung::build_for`]): a rod rung is a [`TendonWorkspace`].
 struct Readings<'a> {
     loads: &'a Loads,
 }
