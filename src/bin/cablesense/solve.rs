@@ -505,3 +505,87 @@ fn solve_rod(
         ExitCode::from(1)
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{readings_rung_by_label, rung_by_label};
+    use cablesense::{Robot, Scene};
+
+    fn robot(path: &str) -> Robot {
+        Scene::load(path).unwrap().build_robot().unwrap()
+    }
+
+    /// `--model LABEL` takes any label `Rung::from_label` reads, in the robot's ladder
+    /// or not, and refuses a bad one naming the bad part, the other choices and the
+    /// ladder's labels.
+    #[test]
+    fn any_valid_label_is_taken_and_a_bad_one_named() {
+        let r = robot("data/scenes/ftdcr_v4.toml");
+        for label in [
+            "cosserat/point/rk4-10/arc",
+            "pcc/none/8",
+            "kirchhoff/accurate/rk4-16",
+        ] {
+            assert_eq!(rung_by_label(&r, label, "scene").unwrap().label(), label);
+        }
+        let e = rung_by_label(&r, "cosserat/heavy/rk4-8", "scene, auto")
+            .unwrap_err()
+            .to_string();
+        for part in [
+            "unknown --model `cosserat/heavy/rk4-8`",
+            "`heavy` is not a guide-mass model",
+            "use scene, auto",
+            "kirchhoff/average/rk4-4",
+        ] {
+            assert!(e.contains(part), "{part}: {e}");
+        }
+    }
+
+    /// On readings: any rod label and CC, PCC only without guide mass (the kinematics
+    /// has none); a bad label lists the readings ladder.
+    #[test]
+    fn readings_labels_refuse_a_pcc_with_mass() {
+        let r = robot("data/scenes/ftdcr_v4.toml");
+        for label in [
+            "cc",
+            "pcc/none/16",
+            "cosserat/point/rk4-10",
+            "kirchhoff/none/rk4-8/exact",
+        ] {
+            assert_eq!(readings_rung_by_label(&r, label).unwrap().label(), label);
+        }
+        let e = readings_rung_by_label(&r, "pcc/point/16")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no guide mass") && e.contains("pcc/none/16"),
+            "{e}"
+        );
+        let e = readings_rung_by_label(&r, "nope").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown --model `nope` for readings") && e.contains("pcc/none/16"),
+            "{e}"
+        );
+    }
+
+    /// CC and PCC refuse a helical continuous tendon by name, for both jobs; the rod
+    /// rungs take it.
+    #[test]
+    fn curvature_labels_refuse_a_helical_tendon() {
+        let text = std::fs::read_to_string("data/scenes/till_tendon_robot.toml")
+            .unwrap()
+            .replacen(
+                "path = { straight = { radius_m = 0.01506, angle_deg = 0.0 } }",
+                "path = { helical = { radius_m = 0.01506, start_angle_deg = 0.0, pitch_m_per_turn = 0.6 } }",
+                1,
+            );
+        let r = Scene::from_toml_str(&text).unwrap().build_robot().unwrap();
+        for label in ["cc", "pcc/none/8"] {
+            let e = rung_by_label(&r, label, "scene").unwrap_err().to_string();
+            assert!(e.contains("robot.cables[0].routing"), "{label}: {e}");
+            let e = readings_rung_by_label(&r, label).unwrap_err().to_string();
+            assert!(e.contains("robot.cables[0].routing"), "{label}: {e}");
+        }
+        assert!(rung_by_label(&r, "cosserat/none/rk4-16", "scene").is_ok());
+    }
+}
