@@ -17,12 +17,11 @@
 
 use super::EstimateError;
 use crate::error::ModelError;
-use crate::ladder::{
-    ConstantCurvature, Differentiable, LadderError, PiecewiseConstantCurvature, Rung,
-};
+use crate::ladder::{CurvatureModel, Differentiable, LadderError, Rung, RungJob};
 use crate::loads::{Frame, Loads, PointLoad};
 use crate::robot::Robot;
 use crate::scene::estimate::{Axis, EstimateSpec, UnknownKind};
+use crate::settings::SolverSettings;
 use crate::statics::{ParamSite, Pose, SolveReport, SolveStatus, Start, Workspace};
 use nalgebra::Vector3;
 
@@ -387,30 +386,52 @@ pub(super) fn build(
     spec.validate(&robot)?;
     loads.validate(&robot)?;
     let (loads, params) = sites(spec, loads);
-    let ladder = |e: LadderError| -> EstimateError {
-        match e {
-            LadderError::Model(m) => m.into(),
-            LadderError::Setting { field, value, why } => {
-                ModelError::OutOfRange { field, value, why }.into()
-            }
-            LadderError::NoCandidate(why) => ModelError::Invalid {
-                field: "estimate model".into(),
-                why,
-            }
-            .into(),
-        }
+    let job = Estimation {
+        loads,
+        params: &params,
     };
-    Ok(match rung {
-        Rung::Rod(s) => Box::new(Workspace::with_params(robot, loads, s.clone(), &params)?),
-        Rung::ConstantCurvature(s) => Box::new(RungModel::new(
-            ConstantCurvature::new(robot, *s).map_err(ladder)?,
-            loads,
-            &params,
-        )?),
-        Rung::PiecewiseConstantCurvature(s) => Box::new(RungModel::new(
-            PiecewiseConstantCurvature::new(robot, *s).map_err(ladder)?,
-            loads,
-            &params,
-        )?),
-    })
+    rung.build_for(robot, job).map_err(from_ladder)
+}
+
+/// The estimator's job on a rung ([`Rung::build_for`]): a curvature rung under
+/// [`RungModel`], a rod rung the shooting [`Workspace`] with the load parameters.
+struct Estimation<'a> {
+    loads: Loads,
+    params: &'a [ParamSite],
+}
+
+impl RungJob for Estimation<'_> {
+    type Output = DynModel;
+    fn curvature<F: CurvatureModel>(self, model: F) -> Result<DynModel, LadderError> {
+        Ok(Box::new(RungModel::new(model, self.loads, self.params)?))
+    }
+    fn rod(self, robot: Robot, settings: &SolverSettings) -> Result<DynModel, LadderError> {
+        Ok(Box::new(Workspace::with_params(
+            robot,
+            self.loads,
+            settings.clone(),
+            self.params,
+        )?))
+    }
+}
+
+/// A rung's build error as the estimator's (the model errors unchanged, a rung
+/// setting out of range as one).
+fn from_ladder(e: LadderError) -> EstimateError {
+    match e {
+        LadderError::Model(m) => m.into(),
+        LadderError::Setting { field, value, why } => {
+            ModelError::OutOfRange { field, value, why }.into()
+        }
+        LadderError::NoCandidate(why) => ModelError::Invalid {
+            field: "estimate model".into(),
+            why,
+        }
+        .into(),
+        e @ LadderError::Label { .. } => ModelError::Invalid {
+            field: "estimate model".into(),
+            why: e.to_string(),
+        }
+        .into(),
+    }
 }

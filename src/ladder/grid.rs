@@ -88,7 +88,7 @@ impl LadderGrid {
                 });
                 let adaptive = self.adaptive_tols.iter().map(|&tol| Integrator::Adaptive {
                     tol,
-                    max_steps: 100_000,
+                    max_steps: super::ADAPTIVE_MAX_STEPS,
                 });
                 for integrator in rk4.chain(adaptive) {
                     out.push(Rung::Rod(SolverSettings {

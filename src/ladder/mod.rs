@@ -23,6 +23,12 @@
 //! (readings -> one arc per section in closed form, [`TendonKinematics`]); PCC takes
 //! the same arcs per section; the rod rungs solve the tendon mechanics
 //! ([`crate::tendons::TendonWorkspace`]).
+//!
+//! **Labels and building.** [`Rung::label`] names a rung (`cc`, `pcc/point/8`,
+//! `cosserat/accurate/adaptive-1e-8`, ...) and [`Rung::from_label`] reads the name
+//! back (module `label`; `--model LABEL` on the command line). One match,
+//! `Rung::build_for`, turns a rung into its model; [`Rung::build`],
+//! [`Rung::build_readings`] and the estimator each adapt what it gives.
 
 mod anderson;
 mod arc;
@@ -31,6 +37,7 @@ mod auto_readings;
 mod cc;
 mod grid;
 mod kinematics;
+mod label;
 mod pcc;
 mod readings;
 mod rod;
@@ -44,6 +51,7 @@ pub use auto_readings::{choose_readings, probe_rows, PROBE_ROWS};
 pub use cc::{CcSettings, ConstantCurvature};
 pub use grid::{CurvatureRungs, LadderGrid, MassChoice};
 pub use kinematics::TendonKinematics;
+pub use label::{guide_mass_name, ADAPTIVE_MAX_STEPS, LABEL_SPELLINGS};
 pub use pcc::{PccSettings, PiecewiseConstantCurvature};
 pub use readings::{readings_ladder, ReadingsModel};
 pub use rod::RodRung;
@@ -51,7 +59,7 @@ pub use rod::RodRung;
 use crate::error::ModelError;
 use crate::loads::Loads;
 use crate::robot::Robot;
-use crate::settings::{CableCoupling, GuideMass, Integrator, RodModel, SolverSettings};
+use crate::settings::{GuideMass, Integrator, RodModel, SolverSettings};
 use crate::statics::{ParamSite, Pose, SolveStatus, Start};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -77,6 +85,14 @@ pub enum LadderError {
     /// The automatic choice was given no candidate rung or no probe load.
     #[error("no candidate rung: {0}")]
     NoCandidate(String),
+    /// A rung label that names no rung ([`Rung::from_label`]).
+    #[error("model label `{label}`: {why}; labels are {}", LABEL_SPELLINGS)]
+    Label {
+        /// The label as given.
+        label: String,
+        /// Which part is wrong and why.
+        why: String,
+    },
 }
 
 /// Counts and outcome of one ladder solve.
@@ -226,39 +242,6 @@ impl Rung {
         })
     }
 
-    /// Short label, e.g. `cc`, `pcc/point/8`, `kirchhoff/average/rk4-16`,
-    /// `cosserat/accurate/adaptive-1e-8`; a rod rung whose cable coupling is not the
-    /// default (`condensed`) ends in `/arc` or `/exact`
-    /// (`cosserat/point/rk4-10/arc`).
-    pub fn label(&self) -> String {
-        match self {
-            Self::ConstantCurvature(_) => "cc".into(),
-            Self::PiecewiseConstantCurvature(p) => {
-                format!(
-                    "pcc/{}/{}",
-                    guide_mass_name(p.guide_mass),
-                    p.pieces_per_section
-                )
-            }
-            Self::Rod(s) => {
-                let model = match s.rod_model {
-                    RodModel::Cosserat => "cosserat",
-                    RodModel::Kirchhoff => "kirchhoff",
-                };
-                let int = match s.integrator {
-                    Integrator::Rk4 { steps_per_section } => format!("rk4-{steps_per_section}"),
-                    Integrator::Adaptive { tol, .. } => format!("adaptive-{tol:.0e}"),
-                };
-                let coupling = match s.cable_coupling {
-                    CableCoupling::Condensed => "",
-                    CableCoupling::Arc => "/arc",
-                    CableCoupling::Exact => "/exact",
-                };
-                format!("{model}/{}/{int}{coupling}", guide_mass_name(s.guide_mass))
-            }
-        }
-    }
-
     /// Family name: `cc`, `pcc`, `kirchhoff` or `cosserat`.
     pub fn family(&self) -> &'static str {
         match self {
@@ -276,26 +259,68 @@ impl Rung {
             _ => None,
         }
     }
+}
+
+/// What a curvature rung is to every job: a forward model with exact length
+/// sensitivities that readings can also drive, cloneable (an estimator keeps a copy
+/// of its model to fall back to).
+pub(crate) trait CurvatureModel: Differentiable + ReadingsModel + Clone + 'static {}
+
+impl<T: Differentiable + ReadingsModel + Clone + 'static> CurvatureModel for T {}
+
+/// One job's adapter from a rung's model ([`Rung::build_for`]).
+pub(crate) trait RungJob {
+    /// What the job makes of the rung.
+    type Output;
+    /// The job on a built curvature rung.
+    fn curvature<F: CurvatureModel>(self, model: F) -> Result<Self::Output, LadderError>;
+    /// The job on a rod rung of `robot` with these settings.
+    fn rod(self, robot: Robot, settings: &SolverSettings) -> Result<Self::Output, LadderError>;
+}
+
+impl Rung {
+    /// Build this rung of `robot` for `job`: the one place a rung becomes its model.
+    /// Each job adapts the result to what it needs: the forward model
+    /// ([`Rung::build`]), the readings model ([`Rung::build_readings`]) and the
+    /// estimator's model ([`crate::estimate::Estimator::on_rung`]).
+    ///
+    /// A curvature rung is one concrete model for every job (it is a
+    /// [`ForwardModel`], a [`Differentiable`] one and a [`ReadingsModel`]), so it is
+    /// built here. A rod rung is a different solver per job (the shooting
+    /// [`crate::statics::Workspace`] with or without load parameters, the tendon solve
+    /// [`crate::tendons::TendonWorkspace`]), so each job builds it from the rung's
+    /// [`SolverSettings`]. A new rung family whose model implements the three traits
+    /// is a new arm of this match and reaches every job with no other change.
+    pub(crate) fn build_for<J: RungJob>(
+        &self,
+        robot: Robot,
+        job: J,
+    ) -> Result<J::Output, LadderError> {
+        match self {
+            Self::ConstantCurvature(s) => job.curvature(ConstantCurvature::new(robot, *s)?),
+            Self::PiecewiseConstantCurvature(s) => {
+                job.curvature(PiecewiseConstantCurvature::new(robot, *s)?)
+            }
+            Self::Rod(s) => job.rod(robot, s),
+        }
+    }
 
     /// Build the model for `robot`.
     pub fn build(&self, robot: &Robot) -> Result<Box<dyn ForwardModel>, LadderError> {
-        Ok(match self {
-            Self::ConstantCurvature(s) => Box::new(ConstantCurvature::new(robot.clone(), *s)?),
-            Self::PiecewiseConstantCurvature(s) => {
-                Box::new(PiecewiseConstantCurvature::new(robot.clone(), *s)?)
-            }
-            Self::Rod(s) => Box::new(RodRung::new(robot.clone(), s.clone())?),
-        })
+        self.build_for(robot.clone(), Forward)
     }
 }
 
-/// Scene-file spelling of a guide-mass model.
-pub fn guide_mass_name(g: GuideMass) -> &'static str {
-    match g {
-        GuideMass::None => "none",
-        GuideMass::Average => "average",
-        GuideMass::Accurate => "accurate",
-        GuideMass::Point => "point",
+/// The forward job: the rung as a [`ForwardModel`] (a rod rung is a [`RodRung`]).
+struct Forward;
+
+impl RungJob for Forward {
+    type Output = Box<dyn ForwardModel>;
+    fn curvature<F: CurvatureModel>(self, model: F) -> Result<Self::Output, LadderError> {
+        Ok(Box::new(model))
+    }
+    fn rod(self, robot: Robot, settings: &SolverSettings) -> Result<Self::Output, LadderError> {
+        Ok(Box::new(RodRung::new(robot, settings.clone())?))
     }
 }
 

@@ -14,9 +14,10 @@
 //! module `crate::experiments`).
 
 use super::{ConstantCurvature, LadderError, LadderReport};
-use super::{PiecewiseConstantCurvature, Rung};
+use super::{CurvatureModel, PiecewiseConstantCurvature, Rung, RungJob};
 use crate::loads::Loads;
 use crate::robot::Robot;
+use crate::settings::SolverSettings;
 use crate::statics::Start;
 use crate::tendons::TendonWorkspace;
 use nalgebra::Vector3;
@@ -101,22 +102,28 @@ impl Rung {
         robot: &Robot,
         loads: &Loads,
     ) -> Result<Box<dyn ReadingsModel>, LadderError> {
-        Ok(match self {
-            Self::ConstantCurvature(s) => {
-                let mut m = ConstantCurvature::new(robot.clone(), *s)?;
-                // fail here, not at the first solve, when there is nothing to drive
-                m.solve_readings(&zeros(robot))?;
-                Box::new(m)
-            }
-            Self::PiecewiseConstantCurvature(s) => {
-                let mut m = PiecewiseConstantCurvature::new(robot.clone(), *s)?;
-                m.solve_readings(&zeros(robot))?;
-                Box::new(m)
-            }
-            Self::Rod(s) => Box::new(
-                TendonWorkspace::new(robot.clone(), loads.clone(), s.clone())?.without_rollback(),
-            ),
-        })
+        self.build_for(robot.clone(), Readings { loads })
+    }
+}
+
+/// The readings job ([`Rung::build_for`]): a rod rung is a [`TendonWorkspace`].
+struct Readings<'a> {
+    loads: &'a Loads,
+}
+
+impl RungJob for Readings<'_> {
+    type Output = Box<dyn ReadingsModel>;
+    fn curvature<F: CurvatureModel>(self, model: F) -> Result<Self::Output, LadderError> {
+        let mut m = model;
+        // fail here, not at the first solve, when there is nothing to drive
+        let zeros = zeros(super::ForwardModel::robot(&m));
+        m.solve_readings(&zeros, Start::Cold)?;
+        Ok(Box::new(m))
+    }
+    fn rod(self, robot: Robot, settings: &SolverSettings) -> Result<Self::Output, LadderError> {
+        Ok(Box::new(
+            TendonWorkspace::new(robot, self.loads.clone(), settings.clone())?.without_rollback(),
+        ))
     }
 }
 

@@ -180,48 +180,72 @@ fn choose_for_readings(
     )?)
 }
 
-/// The rung of the readings ladder with this label, or any rod rung of the full
-/// ladder; the error lists the readings ladder's labels.
+/// The rung with this label ([`Rung::from_label`]) for solving readings: CC, PCC
+/// without guide mass (the kinematics has none) or any rod rung; the error names the
+/// bad part of the label and lists the readings ladder's labels.
 fn readings_rung_by_label(robot: &cablesense::Robot, label: &str) -> anyhow::Result<Rung> {
-    let ladder = ladder::readings_ladder(robot);
-    if let Some(r) = ladder.iter().find(|r| r.label() == label) {
-        return Ok(r.clone());
+    let rung = Rung::from_label(label).map_err(|e| {
+        anyhow::anyhow!(
+            "unknown --model `{label}` for readings: {}; use scene, auto or one of: {}",
+            label_why(e),
+            ladder::readings_ladder(robot)
+                .iter()
+                .map(Rung::label)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })?;
+    if let Rung::PiecewiseConstantCurvature(p) = &rung {
+        anyhow::ensure!(
+            p.guide_mass == cablesense::GuideMass::None,
+            "--model {label} for readings: the constant-curvature kinematics has no guide mass; use pcc/none/{}",
+            p.pieces_per_section
+        );
     }
-    if let Some(r) = ladder::full_ladder(robot)
-        .into_iter()
-        .find(|r| r.label() == label && matches!(r, Rung::Rod(_)))
-    {
-        return Ok(r);
+    curvature_fits(robot, &rung)?;
+    Ok(rung)
+}
+
+/// Why a label names no rung, without the list of spellings (the caller lists labels).
+fn label_why(e: ladder::LadderError) -> String {
+    match e {
+        ladder::LadderError::Label { why, .. } => why,
+        other => other.to_string(),
     }
-    anyhow::bail!(
-        "unknown --model `{label}` for readings; use scene, auto or one of: {}",
-        ladder
-            .iter()
-            .map(Rung::label)
-            .collect::<Vec<_>>()
-            .join(", ")
-    )
+}
+
+/// A curvature rung (CC, PCC) on a robot with a continuously routed tendon it cannot
+/// take: the error says why.
+fn curvature_fits(robot: &cablesense::Robot, rung: &Rung) -> anyhow::Result<()> {
+    if !matches!(rung, Rung::Rod(_)) {
+        ladder::reject_continuous(robot)?;
+    }
+    Ok(())
 }
 
 fn parse_len(s: &str) -> Result<f64, String> {
     ladder::parse_length(s).map_err(|e| e.to_string())
 }
 
-/// The rung of the full ladder with this label (`cc`, `pcc/point/16`, ...); the error
-/// lists the valid labels after `extra` (the command's other choices).
+/// The rung with this label (`cc`, `pcc/point/16`, ...; [`Rung::from_label`]); the
+/// error names the bad part of the label and lists `extra` (the command's other
+/// choices) and the full ladder's labels.
 pub fn rung_by_label(robot: &cablesense::Robot, label: &str, extra: &str) -> anyhow::Result<Rung> {
-    let all = ladder::full_ladder(robot);
-    if label == "cc" || label.starts_with("pcc/") {
-        // not in this robot's ladder when a tendon is routed continuously: say why
-        ladder::reject_continuous(robot)?;
-    }
-    let found = all.iter().find(|r| r.label() == label).cloned();
-    found.with_context(|| {
-        format!(
-            "unknown --model `{label}`; use {extra} or one of: {}",
-            all.iter().map(Rung::label).collect::<Vec<_>>().join(", ")
+    let rung = Rung::from_label(label).map_err(|e| {
+        anyhow::anyhow!(
+            "unknown --model `{label}`: {}; use {extra} or a rung label, {}; the ladder of this robot: {}",
+            label_why(e),
+            ladder::LABEL_SPELLINGS,
+            ladder::full_ladder(robot)
+                .iter()
+                .map(Rung::label)
+                .collect::<Vec<_>>()
+                .join(", ")
         )
-    })
+    })?;
+    // not in this robot's ladder when a tendon is routed continuously: say why
+    curvature_fits(robot, &rung)?;
+    Ok(rung)
 }
 
 /// Run `solve`. Exit code 0 when converged, 1 when the solver did not converge.
@@ -480,4 +504,88 @@ fn solve_rod(
     } else {
         ExitCode::from(1)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{readings_rung_by_label, rung_by_label};
+    use cablesense::{Robot, Scene};
+
+    fn robot(path: &str) -> Robot {
+        Scene::load(path).unwrap().build_robot().unwrap()
+    }
+
+    /// `--model LABEL` takes any label `Rung::from_label` reads, in the robot's ladder
+    /// or not, and refuses a bad one naming the bad part, the other choices and the
+    /// ladder's labels.
+    #[test]
+    fn any_valid_label_is_taken_and_a_bad_one_named() {
+        let r = robot("data/scenes/ftdcr_v4.toml");
+        for label in [
+            "cosserat/point/rk4-10/arc",
+            "pcc/none/8",
+            "kirchhoff/accurate/rk4-16",
+        ] {
+            assert_eq!(rung_by_label(&r, label, "scene").unwrap().label(), label);
+        }
+        let e = rung_by_label(&r, "cosserat/heavy/rk4-8", "scene, auto")
+            .unwrap_err()
+            .to_string();
+        for part in [
+            "unknown --model `cosserat/heavy/rk4-8`",
+            "`heavy` is not a guide-mass model",
+            "use scene, auto",
+            "kirchhoff/average/rk4-4",
+        ] {
+            assert!(e.contains(part), "{part}: {e}");
+        }
+    }
+
+    /// On readings: any rod label and CC, PCC only without guide mass (the kinematics
+    /// has none); a bad label lists the readings ladder.
+    #[test]
+    fn readings_labels_refuse_a_pcc_with_mass() {
+        let r = robot("data/scenes/ftdcr_v4.toml");
+        for label in [
+            "cc",
+            "pcc/none/16",
+            "cosserat/point/rk4-10",
+            "kirchhoff/none/rk4-8/exact",
+        ] {
+            assert_eq!(readings_rung_by_label(&r, label).unwrap().label(), label);
+        }
+        let e = readings_rung_by_label(&r, "pcc/point/16")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no guide mass") && e.contains("pcc/none/16"),
+            "{e}"
+        );
+        let e = readings_rung_by_label(&r, "nope").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown --model `nope` for readings") && e.contains("pcc/none/16"),
+            "{e}"
+        );
+    }
+
+    /// CC and PCC refuse a helical continuous tendon by name, for both jobs; the rod
+    /// rungs take it.
+    #[test]
+    fn curvature_labels_refuse_a_helical_tendon() {
+        let text = std::fs::read_to_string("data/scenes/till_tendon_robot.toml")
+            .unwrap()
+            .replacen(
+                "path = { straight = { radius_m = 0.01506, angle_deg = 0.0 } }",
+                "path = { helical = { radius_m = 0.01506, start_angle_deg = 0.0, pitch_m_per_turn = 0.6 } }",
+                1,
+            );
+        let r = Scene::from_toml_str(&text).unwrap().build_robot().unwrap();
+        for label in ["cc", "pcc/none/8"] {
+            let e = rung_by_label(&r, label, "scene").unwrap_err().to_string();
+            assert!(e.contains("robot.cables[0].routing"), "{label}: {e}");
+            let e = readings_rung_by_label(&r, label).unwrap_err().to_string();
+            assert!(e.contains("robot.cables[0].routing"), "{label}: {e}");
+        }
+        assert!(rung_by_label(&r, "cosserat/none/rk4-16", "scene").is_ok());
+    }
 }
