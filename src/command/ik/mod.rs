@@ -153,6 +153,7 @@
 
 mod active_set;
 mod broyden;
+mod chain;
 mod continuation;
 mod iterate;
 mod jacobian;
@@ -161,6 +162,7 @@ mod report;
 mod settings;
 mod step;
 
+pub use chain::{IkChain, IkChainRow, IkStart};
 pub use report::{IkReport, IkStatus};
 pub use settings::{IkObjective, IkSettings, IkTarget};
 
