@@ -96,7 +96,7 @@ fn reach_bad_targets_are_errors() {
     }
 }
 
-/// `reach --measured FILE`: the recording's measured tips as targets (the scene's
+/// `reach --measured --recording FILE`: the recording's measured tips as targets (the scene's
 /// `[calibration]` columns), every row counted in the summary and the report, the
 /// readings file written; a scene without `[calibration]` is an error.
 #[test]
@@ -112,7 +112,7 @@ fn reach_measured_counts_every_row() {
     std::fs::write(d.join("rec.csv"), &text).unwrap();
     let (out, rep) = (d.join("q.csv"), d.join("rep.csv"));
     let o = Command::new(BIN)
-        .args(["reach", SCENE, "--measured"])
+        .args(["reach", SCENE, "--measured", "--recording"])
         .arg(d.join("rec.csv"))
         .arg("--output")
         .arg(&out)
@@ -152,6 +152,7 @@ fn reach_measured_counts_every_row() {
             "reach",
             "data/scenes/till_tendon_readings.toml",
             "--measured",
+            "--recording",
         ])
         .arg(d.join("rec.csv"))
         .output()

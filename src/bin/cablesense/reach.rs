@@ -20,11 +20,11 @@
 //! IK's own tips differ from them by the forward solve's tolerance (two converged
 //! solves of the same readings from different warm starts).
 //!
-//! `--measured [FILE]`: the recording's measured marker positions as targets (the
-//! scene's `[calibration]` columns, mapped to the base frame by its
+//! `--measured [--recording FILE]`: the recording's measured marker positions as
+//! targets (the scene's `[calibration]` columns, mapped to the base frame by its
 //! `capture_to_base`), each less the marker offset turned by the model's tip
 //! orientation at the row's recorded readings (the measured orientation is not
-//! recorded); without FILE, with the embedded scene, its val.csv. The model's
+//! recorded); without `--recording`, with the embedded scene, its val.csv. The model's
 //! error seen from the other side: how far the closest reachable tip lies from
 //! each measured one, beside the forward error at the recorded readings.
 //!
@@ -71,10 +71,13 @@ pub struct Args {
     /// A tip within this distance is reached (mm).
     #[arg(long = "tolerance-mm", default_value_t = 0.01)]
     tolerance_mm: f64,
-    /// Targets: the measured tips of this recording (the scene's `[calibration]`
-    /// columns); without FILE, with the embedded scene, its val.csv.
-    #[arg(long, value_name = "FILE", num_args = 0..=1, default_missing_value = "", conflicts_with = "targets")]
-    measured: Option<PathBuf>,
+    /// Targets: the measured tips of a recording (the scene's `[calibration]`
+    /// columns): `--recording FILE`, or with the embedded scene its val.csv.
+    #[arg(long, conflicts_with = "targets")]
+    measured: bool,
+    /// The recording whose measured tips `--measured` takes as targets.
+    #[arg(long, value_name = "FILE", requires = "measured")]
+    recording: Option<PathBuf>,
 }
 
 /// Parse a targets CSV.
@@ -225,31 +228,30 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         bail!("--tolerance-mm must be > 0, got {}", a.tolerance_mm);
     }
     let mut measured = None;
-    let targets = match (&a.targets, &a.measured, &a.scene) {
+    let targets = match (&a.targets, a.measured, &a.scene) {
         (Some(f), _, _) => {
             let text =
                 std::fs::read_to_string(f).with_context(|| format!("reading {}", f.display()))?;
             parse_targets(&text, &f.display().to_string())?
         }
-        (None, Some(f), scene_arg) => {
-            let (text, file) = if f.as_os_str().is_empty() {
-                if scene_arg.is_some() {
-                    bail!("--measured needs a recording FILE for {name}");
-                }
-                (VAL_CSV.to_string(), "val.csv (embedded)".to_string())
-            } else {
-                let text = std::fs::read_to_string(f)
-                    .with_context(|| format!("reading {}", f.display()))?;
-                (text, f.display().to_string())
+        (None, true, scene_arg) => {
+            let (text, file) = match (&a.recording, scene_arg) {
+                (Some(f), _) => (
+                    std::fs::read_to_string(f)
+                        .with_context(|| format!("reading {}", f.display()))?,
+                    f.display().to_string(),
+                ),
+                (None, None) => (VAL_CSV.to_string(), "val.csv (embedded)".to_string()),
+                (None, Some(_)) => bail!("--measured needs --recording FILE for {name}"),
             };
             let m = measured_targets(&scene, &text, &file)?;
             let t = m.targets.clone();
             measured = Some((m, file));
             t
         }
-        (None, None, None) => val_tips(&scene)?,
-        (None, None, Some(_)) => {
-            bail!("give --targets FILE (x_m,y_m,z_m per row) or --measured FILE for {name}")
+        (None, false, None) => val_tips(&scene)?,
+        (None, false, Some(_)) => {
+            bail!("give --targets FILE (x_m,y_m,z_m per row) or --measured --recording FILE for {name}")
         }
     };
     let settings = IkSettings {
