@@ -152,7 +152,9 @@ impl IkChain {
         match r.status {
             IkStatus::Reached => false,
             IkStatus::BudgetExhausted => true,
-            IkStatus::Unreachable { distance_m, .. } => !(distance_m <= self.retry_distance_m),
+            IkStatus::Unreachable { distance_m, .. } => {
+                distance_m > self.retry_distance_m || distance_m.is_nan()
+            }
         }
     }
 
