@@ -10,6 +10,9 @@ use cablesense::Scene;
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
+#[path = "ik_boundary.rs"]
+mod boundary;
+
 const FTDCR: &str = "data/calibration/ftdcr_v4_calibrated.toml";
 const DARU: &str = "data/calibration/daru_calibrated.toml";
 
@@ -100,7 +103,15 @@ fn exact_jacobian_matches_differences_of_solves() {
     let mut scene = Scene::load(FTDCR).unwrap();
     scene.numerics.tendons.tolerance_m = 1e-11;
     let rows = val_rows(&scene, 40);
-    let mut ik = IkWorkspace::from_scene(&scene, IkSettings::default()).unwrap();
+    // a slack tendon within 0.1 of the trust radius of its engagement point is
+    // linearised on its taut side (with the others' columns), which differences of
+    // solves at the slack point do not see: a small radius keeps every slack
+    // tendon on its slack side here
+    let settings = IkSettings {
+        trust_radius_m: 1e-8,
+        ..IkSettings::default()
+    };
+    let mut ik = IkWorkspace::from_scene(&scene, settings).unwrap();
     let mut compared = 0;
     for k in [5, 25, 39] {
         ik.set_readings(&rows[k].0).unwrap();

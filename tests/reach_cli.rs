@@ -95,3 +95,69 @@ fn reach_bad_targets_are_errors() {
         assert!(err.contains(needle), "{text}: {err}");
     }
 }
+
+/// `reach --measured --recording FILE`: the recording's measured tips as targets (the scene's
+/// `[calibration]` columns), every row counted in the summary and the report, the
+/// readings file written; a scene without `[calibration]` is an error.
+#[test]
+fn reach_measured_counts_every_row() {
+    let d = tmp("measured");
+    let val = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
+    let rows = 25;
+    let text: String = val
+        .lines()
+        .take(rows + 1)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(d.join("rec.csv"), &text).unwrap();
+    let (out, rep) = (d.join("q.csv"), d.join("rep.csv"));
+    let o = Command::new(BIN)
+        .args(["reach", SCENE, "--measured", "--recording"])
+        .arg(d.join("rec.csv"))
+        .arg("--output")
+        .arg(&out)
+        .arg("--report")
+        .arg(&rep)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
+    assert!(err.contains(&format!("{rows} targets")), "{err}");
+    assert!(
+        err.contains("forward error at the recorded readings"),
+        "{err}"
+    );
+    let counts: usize = ["reached", "unreachable", "out of budget"]
+        .iter()
+        .map(|s| {
+            let i = err.find(&format!(" {s}")).unwrap();
+            let head = &err[..i];
+            head[head.rfind(' ').unwrap() + 1..]
+                .trim_matches(',')
+                .parse::<usize>()
+                .unwrap()
+        })
+        .sum();
+    assert_eq!(counts, rows, "{err}");
+    let report = std::fs::read_to_string(&rep).unwrap();
+    assert_eq!(report.lines().count(), rows + 1);
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(
+        written.lines().filter(|l| !l.starts_with('#')).count(),
+        rows + 1
+    );
+    // no [calibration]: an error naming it
+    let o = Command::new(BIN)
+        .args([
+            "reach",
+            "data/scenes/till_tendon_readings.toml",
+            "--measured",
+            "--recording",
+        ])
+        .arg(d.join("rec.csv"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("[calibration]"), "{err}");
+}

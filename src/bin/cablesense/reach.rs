@@ -19,8 +19,23 @@
 //! `solve --readings`, run on the written text), so the two agree to the last digit;
 //! IK's own tips differ from them by the forward solve's tolerance (two converged
 //! solves of the same readings from different warm starts).
+//!
+//! `--measured [--recording FILE]`: the recording's measured marker positions as
+//! targets (the scene's `[calibration]` columns, mapped to the base frame by its
+//! `capture_to_base`), each less the marker offset turned by the model's tip
+//! orientation at the row's recorded readings (the measured orientation is not
+//! recorded); without `--recording`, with the embedded scene, its val.csv. The model's
+//! error seen from the other side: how far the closest reachable tip lies from
+//! each measured one, beside the forward error at the recorded readings.
+//!
+//! The targets are solved as a chain (`cablesense::command::ik::IkChain`): warm
+//! from the previous row when it was reached, else from the last reached row, and a
+//! row that ends out of budget or more than 0.5 mm away solved once more from zero
+//! readings, the better end kept.
 
 use anyhow::{bail, Context};
+use cablesense::calibrate::RigidTransform;
+use cablesense::command::ik::IkChain;
 use cablesense::command::{IkObjective, IkSettings, IkStatus, IkTarget, IkWorkspace};
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{TrackChain, CALIBRATED_SCENE, VAL_CSV};
@@ -56,6 +71,13 @@ pub struct Args {
     /// A tip within this distance is reached (mm).
     #[arg(long = "tolerance-mm", default_value_t = 0.01)]
     tolerance_mm: f64,
+    /// Targets: the measured tips of a recording (the scene's `[calibration]`
+    /// columns): `--recording FILE`, or with the embedded scene its val.csv.
+    #[arg(long, conflicts_with = "targets")]
+    measured: bool,
+    /// The recording whose measured tips `--measured` takes as targets.
+    #[arg(long, value_name = "FILE", requires = "measured")]
+    recording: Option<PathBuf>,
 }
 
 /// Parse a targets CSV.
@@ -109,6 +131,64 @@ fn val_tips(scene: &Scene) -> anyhow::Result<Vec<IkTarget>> {
     Ok(tips.into_iter().map(IkTarget::position).collect())
 }
 
+/// The measured tips of a recording as targets (module docs), and per row the
+/// forward error at the recorded readings (m: the model's marker point less the
+/// measured one) and whether the model's orientation there was available (the
+/// forward solve converged; else the last converged row's is used).
+struct Measured {
+    targets: Vec<IkTarget>,
+    forward_error_m: Vec<f64>,
+    no_orientation: usize,
+}
+
+fn measured_targets(scene: &Scene, text: &str, file: &str) -> anyhow::Result<Measured> {
+    let cal = scene.calibration.clone().with_context(|| {
+        format!("--measured: the scene has no [calibration] table (its measured columns and capture_to_base) to read {file} with")
+    })?;
+    let frame = RigidTransform::from_vector(
+        &Vector3::from(cal.capture_to_base.rotation_vector),
+        &Vector3::from(cal.capture_to_base.translation_m),
+    );
+    let offset = Vector3::from(cal.marker_offset_m);
+    let mut tw = scene.tendon_workspace()?;
+    let mut parser = scene.readings_parser(&tw);
+    let mut out = Measured {
+        targets: Vec::new(),
+        forward_error_m: Vec::new(),
+        no_orientation: 0,
+    };
+    let mut rotation = cablesense::nalgebra::Matrix3::identity();
+    for (i, l) in text.lines().enumerate() {
+        let row = match parser.line(i + 1, l) {
+            Ok(Some(r)) => r,
+            Ok(None) => continue,
+            Err(e) => bail!("{file}: {e}"),
+        };
+        let Some(m) = row.measured_tip_m else {
+            bail!(
+                "{file}:{}: no measured tip (the scene's [calibration] columns) on this row",
+                i + 1
+            );
+        };
+        let marker = frame.apply(&Vector3::from(m));
+        if tw.solve_readings(&row.readings_m)?.status.is_converged() {
+            let pose = *tw.workspace_mut().solution().tip();
+            rotation = pose.rotation;
+            out.forward_error_m
+                .push((pose.position + pose.rotation * offset - marker).norm());
+        } else {
+            out.no_orientation += 1;
+            out.forward_error_m.push(f64::NAN);
+        }
+        out.targets
+            .push(IkTarget::position(marker - rotation * offset));
+    }
+    if out.targets.is_empty() {
+        bail!("{file}: no rows with readings and a measured tip");
+    }
+    Ok(out)
+}
+
 fn percentile(sorted: &[f64], f: f64) -> f64 {
     if sorted.is_empty() {
         return f64::NAN;
@@ -147,25 +227,45 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if !(a.tolerance_mm.is_finite() && a.tolerance_mm > 0.0) {
         bail!("--tolerance-mm must be > 0, got {}", a.tolerance_mm);
     }
-    let targets = match (&a.targets, &a.scene) {
-        (Some(f), _) => {
+    let mut measured = None;
+    let targets = match (&a.targets, a.measured, &a.scene) {
+        (Some(f), _, _) => {
             let text =
                 std::fs::read_to_string(f).with_context(|| format!("reading {}", f.display()))?;
             parse_targets(&text, &f.display().to_string())?
         }
-        (None, None) => val_tips(&scene)?,
-        (None, Some(_)) => bail!("give --targets FILE (x_m,y_m,z_m per row) for {name}"),
+        (None, true, scene_arg) => {
+            let (text, file) = match (&a.recording, scene_arg) {
+                (Some(f), _) => (
+                    std::fs::read_to_string(f)
+                        .with_context(|| format!("reading {}", f.display()))?,
+                    f.display().to_string(),
+                ),
+                (None, None) => (VAL_CSV.to_string(), "val.csv (embedded)".to_string()),
+                (None, Some(_)) => bail!("--measured needs --recording FILE for {name}"),
+            };
+            let m = measured_targets(&scene, &text, &file)?;
+            let t = m.targets.clone();
+            measured = Some((m, file));
+            t
+        }
+        (None, false, None) => val_tips(&scene)?,
+        (None, false, Some(_)) => {
+            bail!("give --targets FILE (x_m,y_m,z_m per row) or --measured --recording FILE for {name}")
+        }
     };
     let settings = IkSettings {
         objective,
         tolerance_m: a.tolerance_mm * 1e-3,
         ..IkSettings::default()
     };
-    let mut ik = IkWorkspace::from_scene(&scene, settings)
-        .with_context(|| format!("{name}: building the inverse solver"))?;
+    let mut ik = IkChain::new(
+        IkWorkspace::from_scene(&scene, settings)
+            .with_context(|| format!("{name}: building the inverse solver"))?,
+    );
     let spec = scene.readings.clone().unwrap_or_default();
     let (scale, backlash) = (spec.scale_m, spec.backlash_m);
-    let columns = ik.tendon_workspace().columns().to_vec();
+    let columns = ik.workspace().tendon_workspace().columns().to_vec();
     // IK, warm from target to target
     let t0 = std::time::Instant::now();
     let mut reports = Vec::with_capacity(targets.len());
@@ -181,9 +281,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let mut play: Option<Vec<f64>> = None;
     for (k, t) in targets.iter().enumerate() {
         let s = std::time::Instant::now();
-        let r = ik.solve(t)?;
+        let row = ik.solve(t)?;
         times.push(s.elapsed().as_secs_f64());
-        reports.push(r);
+        reports.push(row);
         let q = ik.readings();
         // the command that puts the tendon at q through the play of width b
         let cmd: Vec<f64> = match play.as_mut() {
@@ -235,16 +335,17 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
     if let Some(p) = &a.report {
         let mut rep = String::from(
-            "row,status,tip_x_m,tip_y_m,tip_z_m,distance_m,ik_distance_m,iterations,forward_solves\n",
+            "row,status,tip_x_m,tip_y_m,tip_z_m,distance_m,ik_distance_m,iterations,forward_solves,start,attempts\n",
         );
-        for (k, ((r, tip), t)) in reports.iter().zip(&solved).zip(&targets).enumerate() {
+        for (k, ((row, tip), t)) in reports.iter().zip(&solved).zip(&targets).enumerate() {
+            let r = &row.report;
             let (tip, d) = match tip {
                 Some(tip) => (*tip, (t.position_m - tip).norm()),
                 None => (Vector3::repeat(f64::NAN), f64::NAN),
             };
             writeln!(
                 rep,
-                "{k},{},{},{},{},{},{},{},{}",
+                "{k},{},{},{},{},{},{},{},{},{},{}",
                 r.status.name(),
                 tip.x,
                 tip.y,
@@ -252,7 +353,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 d,
                 r.distance_m,
                 r.iterations,
-                r.forward_solves
+                r.forward_solves,
+                row.start.name(),
+                row.attempts
             )?;
         }
         std::fs::write(p, rep).with_context(|| format!("writing {}", p.display()))?;
@@ -261,7 +364,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let mut counts = [0usize; 3];
     let mut dist = Vec::new();
     let (mut worst_agree, mut not_converged) = (0.0f64, 0);
-    for (r, tip) in reports.iter().zip(&solved) {
+    let mut retried = 0;
+    for (row, tip) in reports.iter().zip(&solved) {
+        let r = &row.report;
+        retried += usize::from(row.attempts > 1);
         counts[match r.status {
             IkStatus::Reached => 0,
             IkStatus::Unreachable { .. } => 1,
@@ -283,6 +389,25 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         counts[1],
         counts[2]
     );
+    eprintln!("{retried} targets solved again from zero readings (out of budget or more than 0.5 mm away from the first start)");
+    if let Some((m, file)) = &measured {
+        let mut f: Vec<f64> = m
+            .forward_error_m
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .collect();
+        f.sort_by(f64::total_cmp);
+        let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+        eprintln!(
+            "measured tips of {file}: forward error at the recorded readings (mm) RMSE {:.3}, median {:.3}, max {:.3} ({} rows without a converged forward solve); reached distance RMS {:.3} mm",
+            rms(&f) * 1e3,
+            percentile(&f, 0.5) * 1e3,
+            percentile(&f, 1.0) * 1e3,
+            m.no_orientation,
+            rms(&dist) * 1e3
+        );
+    }
     eprintln!(
         "distance to target (mm): median {:.4}, 95 % {:.4}, 99 % {:.4}, max {:.4}; within 0.05 mm: {:.1} %",
         percentile(&dist, 0.5) * 1e3,

@@ -8,12 +8,12 @@ impl IkWorkspace {
     /// `s = q_trial - q` with the tip, axis and tension changes `y` it made
     /// (`J += (y - J s) s^T / s^T s`, [`secant_row_update`]; Broyden, Math. Comp.
     /// 19, 1965; Nocedal & Wright eq. 11.24): the Jacobian at the new readings without evaluating it.
-    /// Only with every tendon taut before and after (the active set, and so the
+    /// Only with every tendon taut before (none engaged) and after (the active set, and so the
     /// columns' meaning, unchanged) and without friction; `false` otherwise.
     pub(super) fn broyden_update(&mut self) -> bool {
         let p = self.p;
         if !self.tw.workspace().robot().friction().is_frictionless()
-            || self.slack.iter().any(|s| *s)
+            || self.slack.iter().chain(&self.engaged).any(|s| *s)
             || self.tw.taut().iter().any(|t| !*t)
         {
             return false;

@@ -12,6 +12,9 @@ impl IkWorkspace {
         let mut stalls = 0usize;
         let mut phi = self.merit(target, &self.tip, &self.axis, &self.q, &self.t);
         self.first_order = f64::NAN;
+        self.flip_tried = false;
+        self.engage_override = None;
+        self.reset_radius = false;
         loop {
             let reached = self.is_reached(target);
             if reached && st.objective == IkObjective::Closest {
@@ -23,6 +26,14 @@ impl IkWorkspace {
             n.iterations += 1;
             if !self.jac_valid {
                 self.first_order = f64::NAN;
+                if std::mem::take(&mut self.reset_radius) {
+                    delta = st.trust_radius_m;
+                    stalls = 0;
+                }
+                self.engage_tol_m = self
+                    .engage_override
+                    .take()
+                    .unwrap_or(super::ENGAGE_FRACTION * delta);
                 match self.compute_jacobian() {
                     Some(k) => n.solves += k,
                     None => return self.final_status(reached, false),
@@ -45,8 +56,9 @@ impl IkWorkspace {
                     }
                     if reached || self.first_order <= FIRST_ORDER_TOL {
                         // reached (a secondary objective no longer improving), or
-                        // at a stationary point: the closest tip
-                        outcome = Some(Some(self.final_status(reached, false)));
+                        // at a stationary point: the closest tip (after the other
+                        // side of a tendon at its boundary)
+                        outcome = Some(self.conclude(reached));
                         break;
                     }
                 }
@@ -71,15 +83,14 @@ impl IkWorkspace {
                 }
                 for i in 0..self.p {
                     let (lo, hi) = (self.limits.min_m[i], self.limits.max_m[i]);
-                    let v = if !self.slack[i] {
-                        self.q[i] + self.u[i] / MM
-                    } else if self.u[i] > 1e-9 {
-                        self.q_lin[i] + self.u[i] / MM
-                    } else if st.objective == IkObjective::LeastPull && lo.is_finite() {
+                    let v = if self.slack[i]
+                        && st.objective == IkObjective::LeastPull
+                        && lo.is_finite()
+                    {
                         // stays slack: least pull pays it out to its limit
                         lo
                     } else {
-                        self.q[i]
+                        self.q_lin[i] + self.u[i] / MM
                     };
                     self.q_trial[i] = v.clamp(lo, hi);
                 }
@@ -144,13 +155,40 @@ impl IkWorkspace {
     /// The iteration stops here: the final status at an exact Jacobian (`Some`);
     /// at an updated one, `None` and the next iteration evaluates the exact one
     /// (conclusions, `Unreachable` above all, rest on the exact Jacobian).
+    /// Not reached with a tendon at its taut/slack boundary: the other side's
+    /// linearisation is tried first (once per attempt), from the trust radius of
+    /// the settings.
     pub(super) fn conclude(&mut self, reached: bool) -> Option<IkStatus> {
-        if self.jac_exact {
-            Some(self.final_status(reached, false))
-        } else {
+        if !self.jac_exact {
             self.jac_valid = false;
-            None
+            return None;
         }
+        if !reached && self.try_other_side() {
+            return None;
+        }
+        Some(self.final_status(reached, false))
+    }
+
+    /// Schedule the other side's linearisation for a tendon at its taut/slack
+    /// boundary (module docs, "Taut/slack boundary"): engaged tendons taken as
+    /// slack (engagement tolerance 0), or, with none engaged, slack tendons within
+    /// the settings' trust radius of their engagement point taken as engaged;
+    /// `false` when there is none or it was tried in this attempt.
+    fn try_other_side(&mut self) -> bool {
+        if self.flip_tried {
+            return false;
+        }
+        let engaged = self.engaged.iter().any(|e| *e);
+        let wide = self.settings.trust_radius_m;
+        let near = (0..self.p).any(|i| self.slack[i] && self.gap[i] <= wide);
+        if !engaged && !near {
+            return false;
+        }
+        self.flip_tried = true;
+        self.engage_override = Some(if engaged { 0.0 } else { wide });
+        self.reset_radius = true;
+        self.jac_valid = false;
+        true
     }
 
     pub(super) fn is_reached(&self, target: &IkTarget) -> bool {

@@ -27,16 +27,30 @@ impl IkWorkspace {
         self.x_acc
             .copy_from_slice(self.tw.workspace().unknowns_vector());
         self.taut_cur.copy_from_slice(self.best.taut());
-        // engagement points of the slack tendons: the reading at which the free
-        // length equals the path length (T = 0 on the taut branch)
+        // each tendon's piece of the piecewise-smooth map (module docs, "Taut/slack
+        // boundary"): taut; slack within `engage_tol_m` of its engagement point (the
+        // reading at which the free length equals the path length, T = 0 on the
+        // taut branch): linearised there on the taut side; else slack, its slack
+        // kept >= 0 by a linearised row
         for i in 0..p {
-            self.slack[i] = !self.taut_cur[i];
             self.q_lin[i] = self.q[i];
-            if self.slack[i] {
+            self.slack[i] = false;
+            self.engaged[i] = false;
+            self.gap[i] = 0.0;
+            if !self.taut_cur[i] {
                 let l = self.best.lengths()[self.best.driven()[i]];
                 let off = self.best.mechanics()[i].zero_offset_m;
                 let free = self.best.rest_free_lengths()[i] - (self.q[i] - off);
-                self.q_lin[i] = self.q[i] + (free - l).max(0.0);
+                let gap = (free - l).max(0.0);
+                let top = self.limits.max_m[i].min(self.q_phys[i]);
+                if gap <= self.engage_tol_m && self.q[i] + gap <= top {
+                    self.engaged[i] = true;
+                    self.taut_cur[i] = true;
+                    self.q_lin[i] = self.q[i] + gap;
+                } else {
+                    self.slack[i] = true;
+                    self.gap[i] = gap;
+                }
             }
         }
         // the dual sweep at the converged point
@@ -54,47 +68,43 @@ impl IkWorkspace {
                 return false;
             }
         }
-        // taut tendons' columns with the actual active set
-        if !self.factor_fz(None) {
+        // the columns of the taut and engaged tendons (an engaged one at its
+        // engagement point, T = 0: the one-sided derivative of the pull)
+        if !self.factor_fz() {
             return false;
         }
         for i in 0..p {
             if self.slack[i] {
+                // a slack tendon's reading moves nothing while it stays slack
+                for r in 0..3 {
+                    self.jp[r * p + i] = 0.0;
+                    self.ja[r * p + i] = 0.0;
+                }
+                for k in 0..p {
+                    self.jt[k * p + i] = 0.0;
+                    self.jg[k * p + i] = 0.0;
+                }
                 continue;
             }
             let gain = reading_gain(&self.best.mechanics()[i], self.t[i], true);
-            self.taut_tmp.copy_from_slice(&self.taut_cur);
             if !self.tangent(i, gain) {
-                return false;
-            }
-        }
-        // a slack tendon's column: pulled beyond its engagement point it is taut
-        // from T = 0 (one-sided derivative; the others keep their active set)
-        for i in 0..p {
-            if !self.slack[i] {
-                continue;
-            }
-            if !self.factor_fz(Some(i)) || !self.tangent(i, 1.0) {
                 return false;
             }
         }
         true
     }
 
-    /// Factor `F_z` at the accepted point; with `engaged = Some(i)` slack tendon `i`
-    /// is taut at its engagement point (free length = path length). Sets `taut_tmp`.
-    pub(super) fn factor_fz(&mut self, engaged: Option<usize>) -> bool {
+    /// Factor `F_z` at the accepted point with the active set `taut_cur` (an
+    /// engaged tendon taut at its engagement point: free length = path length,
+    /// `q_lin`). Sets `taut_tmp`.
+    pub(super) fn factor_fz(&mut self) -> bool {
         let nx = self.nx;
         let w = nx + self.ts.len();
         self.taut_tmp.copy_from_slice(&self.taut_cur);
-        if let Some(i) = engaged {
-            self.taut_tmp[i] = true;
-        }
         let free0 = self.best.rest_free_lengths();
         let mech = self.best.mechanics();
         let driven = self.best.driven();
-        let lengths = self.best.lengths();
-        let q = &self.q;
+        let q = &self.q_lin;
         assemble_joint_jacobian(
             nx,
             w,
@@ -102,13 +112,7 @@ impl IkWorkspace {
             &self.jac_m,
             driven,
             mech,
-            |k| {
-                if Some(k) == engaged {
-                    lengths[driven[k]]
-                } else {
-                    free0[k] - (q[k] - mech[k].zero_offset_m)
-                }
-            },
+            |k| free0[k] - (q[k] - mech[k].zero_offset_m),
             &self.t,
             &self.taut_tmp,
             self.lu.matrix_mut(),
@@ -130,6 +134,15 @@ impl IkWorkspace {
                 self.col[nx + k] = 0.0;
             }
             self.jt[k * p + i] = self.col[nx + k];
+        }
+        // a slack tendon's path length along the column: `dl_k/dq_i = dl_k/dz dz`
+        let (w, m) = (nx + self.ts.len(), nx + p);
+        for k in 0..p {
+            if self.slack[k] {
+                let j = self.best.driven()[k];
+                let row = &self.jac_m[j * w..j * w + m];
+                self.jg[k * p + i] = row.iter().zip(&self.col[..m]).map(|(a, b)| a * b).sum();
+            }
         }
         let mut tips = [Vector3::zeros(); 2];
         let mut axes = [Vector3::zeros(); 2];
@@ -172,6 +185,7 @@ impl IkWorkspace {
     pub(super) fn fd_jacobian(&mut self) -> Option<usize> {
         let p = self.p;
         self.slack.fill(false);
+        self.engaged.fill(false);
         self.q_lin.copy_from_slice(&self.q);
         let h = FD_STEP_M;
         let mut solves = 0;

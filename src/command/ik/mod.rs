@@ -77,17 +77,49 @@
 //! shooting unknowns, tensions): by the implicit function theorem
 //! `dz/dq_i = F_z^-1 e_{n+i} (1 + T_i/EA_t)` for a taut tendon (`crate::tendons::ift`,
 //! shared with the calibration's sensitivities, `calibrate::readings_sens`). A slack
-//! tendon's reading moves nothing until its slack is taken up: its column is the
-//! one-sided derivative beyond its engagement point (the reading at which its free
-//! length equals its path length, where it is taut at `T = 0`; `F_z` factored again
-//! with that tendon taut), and the step for it is a pull beyond that point or none
-//! (the reading is then kept, or paid out to its lower limit under `least_pull`). `F_z` is exact, from one dual
+//! tendon's reading moves nothing while it stays slack: its column is zero (see
+//! "Taut/slack boundary" for one at that boundary). `F_z` is exact, from one dual
 //! sweep (`Workspace::joint_jacobians`); the tip's derivative along each tangent is a
 //! central difference of the tip at fixed `(z +- h dz/dq_i)` (two `f64` passes, a smooth
 //! function: truncation `h^2`, no solver tolerance in it), as the calibration does.
 //! `dT/dq` are the tension rows of `dz/dq`. With capstan friction (`mu > 0`) the state
 //! depends on the direction memory, not on `z` alone: the Jacobian is then a central
 //! difference of converged forward solves (`2p` solves).
+//!
+//! **Taut/slack boundary.** Each tendon's taut/slack switch makes `p(q)` a
+//! piecewise-smooth map: smooth on each side, with a kink where a tendon engages
+//! (free length = path length, `T = 0`). A linearisation is valid on one side only,
+//! so each tendon's side is chosen where the Jacobian is evaluated and the step is
+//! kept on it, as for a piecewise-smooth equation whose Newton model is built from
+//! one element of the B-subdifferential (the one-sided Jacobian of the piece the
+//! point lies on; Qi & Sun, "A nonsmooth version of Newton's method", Math. Prog.
+//! 58, 1993; Qi, "Convergence analysis of some algorithms for solving nonsmooth
+//! equations", Math. Oper. Res. 18, 1993), within the trust region of Nocedal &
+//! Wright ch. 4:
+//!
+//! * a taut tendon: taut columns, and its linearised tension kept `>= 0` (the step
+//!   is cut where it would go slack);
+//! * a slack tendon within [`ENGAGE_FRACTION`] of the trust radius of its
+//!   engagement point (the reading that just takes up its slack): *engaged*,
+//!   linearised on its taut side at that point (`F_z` with it taut at `T = 0`,
+//!   free length = path length, its reading from that point, its tension kept
+//!   `>= 0`). The taut side's face `T = 0` gives every tip the slack side gives
+//!   (a slack tendon's reading moves nothing), so nothing is lost, and the model no
+//!   longer flips between the sides from one iteration to the next;
+//! * a slack tendon farther from engagement: zero column, and its linearised slack
+//!   `l_f - l(z) - (dl/dq + e_i) dq >= 0` kept (`dl/dq = dl/dz dz/dq` from the same
+//!   `F_z` solves): the step is cut where the others' motion or its own pull would
+//!   engage it (a breakpoint), and the next linearisation is on its taut side.
+//!
+//! When the iteration would stop short of the target with a tendon at its
+//! boundary (an engaged tendon, or a slack one within the settings' trust radius
+//! of engagement), the other side's linearisation is tried first, once per attempt,
+//! from the settings' trust radius: engaged tendons taken as slack, or slack ones
+//! within that radius taken as engaged. Before this, a slack tendon's column was
+//! the engaged one while the others' columns took it as slack: on FTDCR v4 val row
+//! 19 (`tests/ik_boundary.rs`) steps from such a model were rejected with trust
+//! ratios down to -533, the trust radius collapsed to about 1e-6 m and the tick
+//! ended 14 um away as `unreachable` after 30 iterations; now it is reached in 8.
 //!
 //! **Jacobian updates.** After an accepted step with every tendon taut before and
 //! after (and no friction), the Jacobians are not evaluated again: Broyden's
@@ -121,6 +153,7 @@
 
 mod active_set;
 mod broyden;
+mod chain;
 mod continuation;
 mod iterate;
 mod jacobian;
@@ -129,6 +162,7 @@ mod report;
 mod settings;
 mod step;
 
+pub use chain::{IkChain, IkChainRow, IkStart};
 pub use report::{IkReport, IkStatus};
 pub use settings::{IkObjective, IkSettings, IkTarget};
 
@@ -162,6 +196,9 @@ const FIRST_ORDER_TOL: f64 = 1e-2;
 const CONTINUATION_STEPS: usize = 4;
 /// A reading within this of a limit is on it (m).
 const ON_BOUND_M: f64 = 1e-12;
+/// A slack tendon whose slack is below this fraction of the trust radius is
+/// linearised on its taut side (module docs, "Taut/slack boundary").
+const ENGAGE_FRACTION: f64 = 0.1;
 /// Inverse kinematics on a readings model: allocate once, solve every tick.
 pub struct IkWorkspace {
     /// The forward model, at the accepted readings between calls.
@@ -199,11 +236,29 @@ pub struct IkWorkspace {
     /// Taut flags at the accepted readings, and the active set of one column.
     taut_cur: Vec<bool>,
     taut_tmp: Vec<bool>,
-    /// Slack at the accepted readings, and the linearisation point: the reading
-    /// itself for a taut tendon, the reading that just takes up the slack (its
-    /// engagement point) for a slack one.
+    /// Slack (and not engaged) at the accepted readings, and the linearisation
+    /// point: the reading itself, the reading that just takes up the slack (its
+    /// engagement point) for an engaged one.
     slack: Vec<bool>,
     q_lin: Vec<f64>,
+    /// Slack at the accepted readings but within [`IkWorkspace::engage_tol_m`] of
+    /// its engagement point: linearised on the taut side, at that point (module
+    /// docs, "Taut/slack boundary").
+    engaged: Vec<bool>,
+    /// A slack tendon's slack (free length less path length, m) and the rows of
+    /// its linearised change `dl/dq` (p x p, row `k` for slack tendon `k`).
+    gap: Vec<f64>,
+    jg: Vec<f64>,
+    /// A slack tendon within this of its engagement point is linearised as
+    /// engaged (m): a fraction [`ENGAGE_FRACTION`] of the trust radius when the
+    /// Jacobian is evaluated.
+    engage_tol_m: f64,
+    /// The other side's linearisation (module docs, "Taut/slack boundary"):
+    /// tried in this attempt; the engagement tolerance and the trust radius
+    /// reset for the next Jacobian.
+    flip_tried: bool,
+    engage_override: Option<f64>,
+    reset_radius: bool,
     /// `dp/dq`, `da/dq` (3 x p, row-major) and `dT/dq` (p x p).
     jp: Vec<f64>,
     ja: Vec<f64>,
@@ -249,6 +304,7 @@ impl IkWorkspace {
             .map(|(l0, mech)| 0.99 * l0 + mech.zero_offset_m)
             .collect();
         let best = Box::new(tw.clone());
+        let engage_tol_m = ENGAGE_FRACTION * settings.trust_radius_m;
         let mut me = Self {
             start_ws: best.clone(),
             end_ws: best.clone(),
@@ -276,6 +332,13 @@ impl IkWorkspace {
             taut_tmp: vec![true; p],
             slack: vec![false; p],
             q_lin: vec![0.0; p],
+            engaged: vec![false; p],
+            gap: vec![0.0; p],
+            jg: vec![0.0; p * p],
+            engage_tol_m,
+            flip_tried: false,
+            engage_override: None,
+            reset_radius: false,
             jp: vec![0.0; 3 * p],
             ja: vec![0.0; 3 * p],
             jt: vec![0.0; p * p],

@@ -102,35 +102,40 @@ impl IkWorkspace {
             }
         }
         for i in 0..p {
-            // from the linearisation point; a slack tendon's step only pulls beyond
-            // its engagement point (its reading is kept when the step is 0)
+            // from the linearisation point (an engaged tendon's engagement point)
             let hi = (self.limits.max_m[i].min(self.q_phys[i]) - self.q_lin[i]).min(delta);
-            let lo = if self.slack[i] {
-                0.0
-            } else {
-                (self.limits.min_m[i] - self.q_lin[i]).max(-delta)
-            };
+            let lo = (self.limits.min_m[i] - self.q_lin[i]).max(-delta);
             self.qp.hi[i] = (hi * MM).max(0.0);
             self.qp.lo[i] = (lo * MM).min(0.0);
-            // the linearised tension of each tendon stays >= 0: the model of the
-            // active set holds only up to where a taut tendon goes slack
-            self.qp.rhs[i] = self.t[i].max(0.0);
             let row = &mut self.qp.rows[i * p..(i + 1) * p];
-            for (a, j) in row.iter_mut().zip(&self.jt[i * p..(i + 1) * p]) {
-                *a = -j / MM;
+            if self.slack[i] {
+                // a slack tendon stays slack in this step: its linearised slack
+                // `gap - (dl/dq + e_i) u >= 0`; the step is cut where it would
+                // engage, and the next linearisation is on its taut side
+                self.qp.rhs[i] = self.gap[i] * MM;
+                row.copy_from_slice(&self.jg[i * p..(i + 1) * p]);
+                row[i] += 1.0;
+            } else {
+                // the linearised tension stays >= 0: the model of the taut side
+                // holds only up to where the tendon goes slack
+                self.qp.rhs[i] = self.t[i].max(0.0);
+                for (a, j) in row.iter_mut().zip(&self.jt[i * p..(i + 1) * p]) {
+                    *a = -j / MM;
+                }
             }
         }
     }
 
     /// Norm of the projected gradient `g` (mm): per reading, the part of `-g` that
-    /// the limits allow (a reading on its lower limit, or a slack tendon's, whose
-    /// derivative is the pull beyond its engagement point, only increases; one on
-    /// its upper limit only decreases).
+    /// the limits allow (a reading on its lower limit, or an engaged tendon's,
+    /// whose derivative is the pull beyond its engagement point, paying out only
+    /// slackens it, only increases; one on its upper limit only decreases; a slack
+    /// tendon's gradient is 0).
     pub(super) fn projected_gradient_norm(&self) -> f64 {
         let mut n2 = 0.0;
         for i in 0..self.p {
             let gi = self.g[i];
-            let lo = self.slack[i] || self.q[i] <= self.limits.min_m[i] + ON_BOUND_M;
+            let lo = self.engaged[i] || self.q[i] <= self.limits.min_m[i] + ON_BOUND_M;
             let hi = self.q_lin[i] >= self.limits.max_m[i].min(self.q_phys[i]) - ON_BOUND_M;
             let v = match (lo, hi) {
                 (true, true) => 0.0,
