@@ -66,6 +66,31 @@ fn hull_volume_of_known_solids() {
     assert!((f - 0.5).abs() < 2e-3, "{f}");
 }
 
+/// The same points give the same hull, bit for bit, in whatever order they come and
+/// however often it is computed (the hull library's own output order varies between
+/// runs; `hull.obj` and the volume must not).
+#[test]
+fn hull_is_the_same_for_the_same_points() {
+    let pts = cloud(2000, |u| {
+        Vector3::new(
+            u.x * 0.03,
+            u.y * 0.02 + 0.1 * u.x * u.x,
+            u.z * 0.05 + u.y * u.y * 0.01,
+        )
+    });
+    let once = Hull::of(&pts).unwrap();
+    let mut reversed = pts.clone();
+    reversed.reverse();
+    for _ in 0..5 {
+        assert_eq!(Hull::of(&pts).unwrap(), once);
+        assert_eq!(Hull::of(&reversed).unwrap(), once);
+    }
+    assert!(once.volume_m3 > 0.0 && once.triangles.len() >= 4);
+    // vertices sorted by coordinates; every triangle starts at its smallest vertex
+    assert!(once.vertices.windows(2).all(|w| w[0].x <= w[1].x));
+    assert!(once.triangles.iter().all(|t| t[0] < t[1] && t[0] < t[2]));
+}
+
 #[test]
 fn hull_bad_points_are_errors() {
     let flat = cloud(50, |u| Vector3::new(u.x, u.y, 0.0));

@@ -69,18 +69,39 @@ impl Hull {
                 why: "the points span no volume (all in one plane or line)".into(),
             });
         }
+        // one order for the same points: chull's output order changes from run to run
+        // (its hash maps), so the vertices are sorted by their coordinates, each
+        // triangle starts at its smallest vertex (orientation kept) and the triangles
+        // are sorted; the volume is summed in that order, and `hull.obj` is the same file
+        let mut order: Vec<usize> = (0..vertices.len()).collect();
+        order.sort_by(|&i, &j| {
+            let (a, b) = (&vertices[i], &vertices[j]);
+            a.x.total_cmp(&b.x)
+                .then(a.y.total_cmp(&b.y))
+                .then(a.z.total_cmp(&b.z))
+        });
+        let mut rank = vec![0usize; vertices.len()];
+        for (r, &i) in order.iter().enumerate() {
+            rank[i] = r;
+        }
+        let vertices: Vec<Vector3<f64>> = order.iter().map(|&i| vertices[i]).collect();
         let centroid = vertices.iter().sum::<Vector3<f64>>() / vertices.len() as f64;
+        for tri in &mut triangles {
+            *tri = tri.map(|i| rank[i]);
+            let [a, b, c] = tri.map(|i| vertices[i]);
+            if (a - centroid).dot(&(b - a).cross(&(c - a))) < 0.0 {
+                tri.swap(1, 2);
+            }
+            let first = (0..3).min_by_key(|&k| tri[k]).unwrap_or(0);
+            tri.rotate_left(first);
+        }
+        triangles.sort_unstable();
         let mut volume = 0.0;
         let mut planes = Vec::with_capacity(triangles.len());
-        for tri in &mut triangles {
+        for tri in &triangles {
             let [a, b, c] = tri.map(|i| vertices[i]);
-            let mut nrm = (b - a).cross(&(c - a));
-            let six_v = (a - centroid).dot(&nrm);
-            if six_v < 0.0 {
-                tri.swap(1, 2);
-                nrm = -nrm;
-            }
-            volume += six_v.abs() / 6.0;
+            let nrm = (b - a).cross(&(c - a));
+            volume += (a - centroid).dot(&nrm).abs() / 6.0;
             let len = nrm.norm();
             let u = if len > 0.0 { nrm / len } else { nrm };
             planes.push((u, u.dot(&a)));
