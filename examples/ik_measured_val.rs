@@ -38,10 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         false,
     )?;
     let cal = scene.calibration.clone().ok_or("no [calibration]")?;
-    let frame = RigidTransform::from_vector(
-        &Vector3::from(cal.capture_to_base.rotation_vector),
-        &Vector3::from(cal.capture_to_base.translation_m),
-    );
+    let frame = RigidTransform::from_spec(&cal.capture_to_base);
     let offset = Vector3::from(cal.marker_offset_m);
     let mut tw = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&tw);

@@ -148,10 +148,7 @@ pub fn predict_recording<'py>(
     let spec = scene_spec(scene);
     let out = py.detach(|| {
         let rec = Recording::load(&recording, &ColumnMap::from_spec(&spec))?;
-        let frame = RigidTransform::from_vector(
-            &Vector3::from(spec.capture_to_base.rotation_vector),
-            &Vector3::from(spec.capture_to_base.translation_m),
-        );
+        let frame = RigidTransform::from_spec(&spec.capture_to_base);
         let offset = Vector3::from(spec.marker_offset_m);
         let mut model = SceneModel::new(scene, &[], &rec.input_names, spec.marker_s_m)?;
         let (mut predicted, mut measured, mut lines) = (Vec::new(), Vec::new(), Vec::new());

@@ -72,10 +72,7 @@ impl FrameSetup {
     /// The capture frame and marker offset of a scene's `[calibration]` table.
     pub fn from_spec(spec: &CalibrationSpec) -> Self {
         Self {
-            capture_to_base: RigidTransform::from_vector(
-                &Vector3::from(spec.capture_to_base.rotation_vector),
-                &Vector3::from(spec.capture_to_base.translation_m),
-            ),
+            capture_to_base: RigidTransform::from_spec(&spec.capture_to_base),
             marker_offset_m: Vector3::from(spec.marker_offset_m),
             fit_capture_frame: spec.fit_capture_frame,
             fit_marker_offset: spec.fit_marker_offset,

@@ -25,6 +25,15 @@ impl Default for RigidTransform {
 }
 
 impl RigidTransform {
+    /// From a scene's transform (`[calibration] capture_to_base`: rotation vector,
+    /// translation).
+    pub fn from_spec(spec: &crate::scene::calibration::TransformSpec) -> Self {
+        Self::from_vector(
+            &Vector3::from(spec.rotation_vector),
+            &Vector3::from(spec.translation_m),
+        )
+    }
+
     /// From a rotation vector (rad) and a translation (m).
     pub fn from_vector(rotation_vector: &Vector3<f64>, translation: &Vector3<f64>) -> Self {
         Self {

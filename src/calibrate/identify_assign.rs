@@ -310,10 +310,7 @@ pub fn identify_recording(
     }
     let (frame, offset) = match &scene.calibration {
         Some(c) => (
-            RigidTransform::from_vector(
-                &Vector3::from(c.capture_to_base.rotation_vector),
-                &Vector3::from(c.capture_to_base.translation_m),
-            ),
+            RigidTransform::from_spec(&c.capture_to_base),
             Vector3::from(c.marker_offset_m),
         ),
         None => (

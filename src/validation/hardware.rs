@@ -273,10 +273,7 @@ pub fn hardware_benchmark(
     let spec = scene.calibration.clone().ok_or_else(|| {
         CalibrationError::BadInput("the calibrated scene has no [calibration] table".into())
     })?;
-    let frame = RigidTransform::from_vector(
-        &Vector3::from(spec.capture_to_base.rotation_vector),
-        &Vector3::from(spec.capture_to_base.translation_m),
-    );
+    let frame = RigidTransform::from_spec(&spec.capture_to_base);
     let offset = Vector3::from(spec.marker_offset_m);
     let mut model = ServoModel::new(scene, &[], &val.input_names, spec.marker_s_m)?;
     let robot_length_m = scene

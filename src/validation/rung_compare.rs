@@ -159,10 +159,7 @@ pub fn compare_with_cc(
     if val.rows.is_empty() || train.rows.is_empty() {
         return Err(bad(format!("{robot}: no train or no held-out rows")));
     }
-    let frame = RigidTransform::from_vector(
-        &Vector3::from(spec.capture_to_base.rotation_vector),
-        &Vector3::from(spec.capture_to_base.translation_m),
-    );
+    let frame = RigidTransform::from_spec(&spec.capture_to_base);
     let offset = Vector3::from(spec.marker_offset_m);
     // Cosserat: every held-out row, failures kept as None
     let t0 = Instant::now();

@@ -153,10 +153,7 @@ pub fn track_errors(
             "{file}: the scene has no [calibration] table (capture frame, marker offset)"
         ))
     })?;
-    let frame = RigidTransform::from_vector(
-        &Vector3::from(spec.capture_to_base.rotation_vector),
-        &Vector3::from(spec.capture_to_base.translation_m),
-    );
+    let frame = RigidTransform::from_spec(&spec.capture_to_base);
     let offset = Vector3::from(spec.marker_offset_m);
     let ws = scene
         .tendon_workspace()

@@ -145,10 +145,7 @@ fn measured_targets(scene: &Scene, text: &str, file: &str) -> anyhow::Result<Mea
     let cal = scene.calibration.clone().with_context(|| {
         format!("--measured: the scene has no [calibration] table (its measured columns and capture_to_base) to read {file} with")
     })?;
-    let frame = RigidTransform::from_vector(
-        &Vector3::from(cal.capture_to_base.rotation_vector),
-        &Vector3::from(cal.capture_to_base.translation_m),
-    );
+    let frame = RigidTransform::from_spec(&cal.capture_to_base);
     let offset = Vector3::from(cal.marker_offset_m);
     let mut tw = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&tw);

@@ -83,10 +83,7 @@ fn measured(scene: &Scene, name: &str, text: &str) -> anyhow::Result<Measured> {
     let map = column_map(scene).with_context(|| format!("{name}: reading the markers"))?;
     let rec = Recording::parse_str(name, text, &map)?;
     let spec = scene.calibration.clone().unwrap_or_default();
-    let frame = RigidTransform::from_vector(
-        &Vector3::from(spec.capture_to_base.rotation_vector),
-        &Vector3::from(spec.capture_to_base.translation_m),
-    );
+    let frame = RigidTransform::from_spec(&spec.capture_to_base);
     Ok(Measured {
         name: name.to_string(),
         lines: rec.rows.iter().map(|r| r.line).collect(),
