@@ -111,6 +111,10 @@
 //! under `docs/` and the front page is `README.md`.
 
 #![warn(missing_docs)]
+// Every type a public signature reaches can be named by a user (and is in the docs):
+// narrowing a re-export to `pub(crate)` while a public function still returns the
+// type is refused (CI runs clippy with `-D warnings`).
+#![warn(unnameable_types)]
 
 pub(crate) mod cables;
 pub mod calibrate;

@@ -65,7 +65,7 @@ mod tick;
 
 pub use crate::scene::estimate::{Axis, EstimateSpec, Method, UnknownKind, UnknownSpec};
 pub use joint::JointEstimator;
-pub use model::{DynModel, EstimationModel, RungModel};
+pub use model::{CloneModel, DynModel, EstimationModel, RungModel};
 pub use tendon::{
     Prediction, TendonEstimate, TendonLoadEstimator, TendonModel, SLACK_AGREES_SIGMAS,
 };
