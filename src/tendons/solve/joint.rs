@@ -321,14 +321,14 @@ impl TendonWorkspace {
     /// continuation step fails too.
     pub(super) fn solve_joint(&mut self) -> bool {
         self.joint.x0.copy_from_slice(self.ws.unknowns_vector());
-        self.joint.t0.copy_from_slice(&self.t);
+        self.joint.t0.copy_from_slice(&self.iter.t);
         self.joint.x.copy_from_slice(&self.joint.x0);
         self.joint.predicted = false;
         let mut first = None;
         match self.joint_predict() {
             RowStart::Converged => {
-                self.report.status = SolveStatus::Converged;
-                self.report.iterations = 0;
+                self.status.set(SolveStatus::Converged);
+                self.status.report.iterations = 0;
                 return true;
             }
             RowStart::Evaluated(m) => match self.joint_newton(1.0, Some(m)) {
@@ -337,7 +337,7 @@ impl TendonWorkspace {
                 Err(_) => {
                     // the predicted start did not converge: the row's plain start
                     self.joint_inner_tolerance(0.0);
-                    self.t.copy_from_slice(&self.joint.t0);
+                    self.iter.t.copy_from_slice(&self.joint.t0);
                     self.joint.x.copy_from_slice(&self.joint.x0);
                 }
             },
@@ -350,13 +350,13 @@ impl TendonWorkspace {
                 Err(first) => first,
             },
         };
-        if self.budget_skips_continuation() {
+        if self.budget.skips_continuation(self.joint.cold) {
             return self.joint_hand_back();
         }
         // continuation, when the first fresh step says how far the row is (from the
         // free lengths of the starting point: the previous row's); failing that, a
         // second one with a larger step limit; then the nested method
-        self.joint.free_row.copy_from_slice(&self.free);
+        self.joint.free_row.copy_from_slice(&self.iter.free);
         self.joint_continuation(first) || self.joint_retry(first)
     }
 
@@ -398,23 +398,24 @@ impl TendonWorkspace {
             return None;
         }
         self.ref_leave();
-        let p = self.driven.len();
-        self.theta[..p].copy_from_slice(&self.t);
-        self.ws.set_theta(&self.theta);
-        self.report.forward_solves += 1;
+        let p = self.tendons.driven.len();
+        self.iter.theta[..p].copy_from_slice(&self.iter.t);
+        self.ws.set_theta(&self.iter.theta);
+        self.status.report.forward_solves += 1;
         let res = self.ws.adopt_unknowns(&self.joint.x, true);
         if !res.is_finite() {
             return None;
         }
-        self.ws.cable_lengths_into(&mut self.lengths);
-        self.update_g();
+        self.ws.cable_lengths_into(&mut self.iter.lengths);
+        self.iter
+            .update_g(&self.tendons, &self.friction.mean_factor);
         let tol = self.ws.report().tolerance;
         let tol_g = self.tendon_settings().tolerance_m;
         let n = self.joint.x.len();
         self.joint.f_now[..n].copy_from_slice(self.ws.residual_vector());
-        self.joint.f_now[n..].copy_from_slice(&self.g);
+        self.joint.f_now[n..].copy_from_slice(&self.iter.g);
         self.joint.l2 = self.joint_norms(tol).0;
-        Some((res / tol).max(self.merit() / tol_g))
+        Some((res / tol).max(self.iter.merit() / tol_g))
     }
 
     /// Restore the row's starting point for the nested method; `false`.
@@ -425,12 +426,12 @@ impl TendonWorkspace {
             return false;
         }
         self.joint_inner_tolerance(0.0);
-        self.t.copy_from_slice(&self.joint.t0);
+        self.iter.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);
         self.joint.lu_valid = false;
         if self.joint_evaluate().is_none() {
             // the start was a converged row: only a non-finite theta could fail it
-            self.has_solution = false;
+            self.status.has_solution = false;
         }
         false
     }

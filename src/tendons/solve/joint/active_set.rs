@@ -36,7 +36,7 @@ impl TendonWorkspace {
     /// complementarity problem (module docs); unchanged when none is found.
     /// Needs the iterate's branches (`joint_save_branches`) and `joint.ts` = `t`.
     pub(super) fn joint_linear_active_set(&mut self, n: usize, p: usize) {
-        let w = n + self.theta.len();
+        let w = n + self.iter.theta.len();
         let m = n + p;
         {
             let jb = &mut self.joint;
@@ -52,11 +52,11 @@ impl TendonWorkspace {
                 let flip = if jb.lu_taut[i] {
                     jb.ts[i] + jb.dz[n + i] < 0.0
                 } else {
-                    let j = self.driven[i];
-                    let c = self.mech[i].tangent_compliance(
-                        self.free[i],
+                    let j = self.tendons.driven[i];
+                    let c = self.tendons.mech[i].tangent_compliance(
+                        self.iter.free[i],
                         jb.ts[i],
-                        self.mean_factor[i],
+                        self.friction.mean_factor[i],
                     );
                     let row = &jb.jac_m[j * w..j * w + m];
                     let dl: f64 = row.iter().zip(&jb.dz).map(|(a, b)| a * b).sum();
@@ -115,12 +115,12 @@ impl TendonWorkspace {
     /// `c_i T_i + L_f,i - l_i` and the slack arm `a_i T_i`), before a fresh step's
     /// trials overwrite the lengths.
     pub(super) fn joint_save_branches(&mut self) {
-        for i in 0..self.driven.len() {
-            let j = self.driven[i];
-            let m = &self.mech[i];
-            let (f, mf) = (self.free[i], self.mean_factor[i]);
-            self.joint.gap0[i] = m.covered(f, self.t[i], mf) - self.lengths[j];
-            self.joint.arm0[i] = (m.compliance(f, mf) + self.geo[i]) * self.t[i];
+        for i in 0..self.tendons.driven.len() {
+            let j = self.tendons.driven[i];
+            let m = &self.tendons.mech[i];
+            let (f, mf) = (self.iter.free[i], self.friction.mean_factor[i]);
+            self.joint.gap0[i] = m.covered(f, self.iter.t[i], mf) - self.iter.lengths[j];
+            self.joint.arm0[i] = (m.compliance(f, mf) + self.tendons.geo[i]) * self.iter.t[i];
         }
     }
 
@@ -138,7 +138,7 @@ impl TendonWorkspace {
         jb.sw_taut.copy_from_slice(&jb.lu_taut);
         jb.sw_dz.copy_from_slice(&jb.dz);
         jb.sw_f.copy_from_slice(&jb.f_prev);
-        jb.lu_taut.copy_from_slice(&self.taut);
+        jb.lu_taut.copy_from_slice(&self.iter.taut);
         if !self.joint_step_with_set(n, p) {
             self.joint_unswitch();
             return false;

@@ -42,7 +42,7 @@ impl TendonWorkspace {
     /// follows.
     pub(super) fn joint_carry_to_iterate(&mut self, n: usize, p: usize) -> bool {
         let m = n + p;
-        let w = n + self.theta.len();
+        let w = n + self.iter.theta.len();
         let jb = &mut self.joint;
         jb.lu.matrix_mut().copy_from_slice(&jb.h);
         if !factor_and_invert(&mut jb.lu, &mut jb.jinv) {
@@ -50,21 +50,32 @@ impl TendonWorkspace {
             return false;
         }
         for i in 0..p {
-            if jb.lu_taut[i] == self.taut[i] {
+            if jb.lu_taut[i] == self.iter.taut[i] {
                 continue;
             }
             let row = &mut jb.jinv[(n + i) * m..(n + i + 1) * m];
-            let j = self.driven[i];
-            let (mech, f, mf) = (&self.mech[i], self.free[i], self.mean_factor[i]);
-            let c = if self.taut[i] {
-                mech.tangent_compliance(f, self.t[i], mf)
+            let j = self.tendons.driven[i];
+            let (mech, f, mf) = (
+                &self.tendons.mech[i],
+                self.iter.free[i],
+                self.friction.mean_factor[i],
+            );
+            let c = if self.iter.taut[i] {
+                mech.tangent_compliance(f, self.iter.t[i], mf)
             } else {
                 mech.compliance(f, mf)
             };
             let sweep_row = &jb.jac_m[j * w..j * w + m];
-            tendon_row(row, n + i, self.taut[i], sweep_row, c, self.geo[i]);
+            tendon_row(
+                row,
+                n + i,
+                self.iter.taut[i],
+                sweep_row,
+                c,
+                self.tendons.geo[i],
+            );
         }
-        jb.lu_taut.copy_from_slice(&self.taut);
+        jb.lu_taut.copy_from_slice(&self.iter.taut);
         jb.lu.matrix_mut().copy_from_slice(&jb.jinv);
         jb.lu_valid = factor_and_invert(&mut jb.lu, &mut jb.h);
         jb.lu_valid
@@ -108,8 +119,8 @@ mod tests {
     fn a_carried_inverse_is_the_inverse_of_the_exchanged_rows() {
         let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
         let mut tw = scene.tendon_workspace().expect("workspace");
-        let (n, p) = (tw.ws.unknowns(), tw.driven.len());
-        let (m, w) = (n + p, n + tw.theta.len());
+        let (n, p) = (tw.ws.unknowns(), tw.tendons.driven.len());
+        let (m, w) = (n + p, n + tw.iter.theta.len());
         let mut q = vec![0.0; p];
         q[0] = 0.002;
         q[3] = -0.004;
@@ -124,7 +135,7 @@ mod tests {
         set1[to_slack] = false;
         set1[to_taut] = true;
         // from the sweep's inverse: carried against assembled
-        tw.taut.copy_from_slice(&set1);
+        tw.iter.taut.copy_from_slice(&set1);
         assert!(tw.joint_carry_to_iterate(n, p));
         let carried = tw.joint.h.clone();
         tw.joint.lu_taut.copy_from_slice(&set1);
@@ -164,14 +175,15 @@ mod tests {
             let row = &j1[r * m..(r + 1) * m];
             if r == n + to_slack {
                 let i = to_slack;
-                let a = tw.mech[i].compliance(tw.free[i], tw.mean_factor[i]) + tw.geo[i];
+                let a = tw.tendons.mech[i].compliance(tw.iter.free[i], tw.friction.mean_factor[i])
+                    + tw.tendons.geo[i];
                 for (k, v) in row.iter().enumerate() {
                     let want = if k == r { a } else { 0.0 };
                     assert!((v - want).abs() < 1e-9 * a, "slack row, column {k}: {v}");
                 }
             } else if r == n + to_taut {
-                let (i, j) = (to_taut, tw.driven[to_taut]);
-                let c = tw.mech[i].compliance(tw.free[i], tw.mean_factor[i]);
+                let (i, j) = (to_taut, tw.tendons.driven[to_taut]);
+                let c = tw.tendons.mech[i].compliance(tw.iter.free[i], tw.friction.mean_factor[i]);
                 let sweep: Vec<f64> = (0..m)
                     .map(|k| -tw.joint.jac_m[j * w + k] + if k == r { c } else { 0.0 })
                     .collect();

@@ -15,7 +15,7 @@ impl TendonWorkspace {
             jb.lu_valid = false;
             return false;
         }
-        jb.lu_taut.copy_from_slice(&self.taut);
+        jb.lu_taut.copy_from_slice(&self.iter.taut);
         self.joint_assemble()
     }
 
@@ -23,8 +23,8 @@ impl TendonWorkspace {
     /// `jac_s`, `jac_m` with the active set `joint.lu_taut`.
     pub(super) fn joint_assemble(&mut self) -> bool {
         let n = self.ws.unknowns();
-        let p = self.driven.len();
-        let w = n + self.theta.len();
+        let p = self.tendons.driven.len();
+        let w = n + self.iter.theta.len();
         let jb = &mut self.joint;
         let m = n + p;
         let a = jb.lu.matrix_mut();
@@ -34,8 +34,12 @@ impl TendonWorkspace {
         }
         for i in 0..p {
             let row = &mut a[(n + i) * m..(n + i + 1) * m];
-            let j = self.driven[i];
-            let (mech, f, mf) = (&self.mech[i], self.free[i], self.mean_factor[i]);
+            let j = self.tendons.driven[i];
+            let (mech, f, mf) = (
+                &self.tendons.mech[i],
+                self.iter.free[i],
+                self.friction.mean_factor[i],
+            );
             // (the tangent at the iterate's tension, where the sweep was taken)
             let c = if jb.lu_taut[i] {
                 mech.tangent_compliance(f, jb.ts[i], mf)
@@ -43,7 +47,7 @@ impl TendonWorkspace {
                 mech.compliance(f, mf)
             };
             let sweep_row = &jb.jac_m[j * w..j * w + m];
-            tendon_row(row, n + i, jb.lu_taut[i], sweep_row, c, self.geo[i]);
+            tendon_row(row, n + i, jb.lu_taut[i], sweep_row, c, self.tendons.geo[i]);
         }
         jb.lu_valid = factor_and_invert(&mut jb.lu, &mut jb.h);
         jb.lu_valid
@@ -60,7 +64,7 @@ impl TendonWorkspace {
         }
         for i in 0..p {
             if !jb.lu_taut[i] {
-                jb.dz[n + i] = -self.t[i];
+                jb.dz[n + i] = -self.iter.t[i];
             }
         }
     }
@@ -82,7 +86,7 @@ impl TendonWorkspace {
             jb.step[i] = jb.x[i] - jb.xs[i];
         }
         for i in 0..p {
-            jb.step[n + i] = self.t[i] - jb.ts[i];
+            jb.step[n + i] = self.iter.t[i] - jb.ts[i];
         }
         for (y, (a, b)) in jb.yv.iter_mut().zip(jb.f_now.iter().zip(&jb.f_prev)) {
             *y = a - b;

@@ -40,9 +40,9 @@ impl TendonWorkspace {
     /// Keep the evaluation of the current iterate (`joint.x`, `t`, evaluated last).
     pub(super) fn joint_keep(&mut self) {
         let k = &mut self.joint.kept;
-        k.lengths.copy_from_slice(&self.lengths);
-        k.g.copy_from_slice(&self.g);
-        k.taut.copy_from_slice(&self.taut);
+        k.lengths.copy_from_slice(&self.iter.lengths);
+        k.g.copy_from_slice(&self.iter.g);
+        k.taut.copy_from_slice(&self.iter.taut);
         k.f.copy_from_slice(&self.joint.f_now);
         k.l2 = self.joint.l2;
     }
@@ -54,16 +54,16 @@ impl TendonWorkspace {
         if self.ws.settles_holes() {
             return false;
         }
-        let p = self.driven.len();
+        let p = self.tendons.driven.len();
         let k = &self.joint.kept;
-        self.lengths.copy_from_slice(&k.lengths);
-        self.g.copy_from_slice(&k.g);
-        self.taut.copy_from_slice(&k.taut);
+        self.iter.lengths.copy_from_slice(&k.lengths);
+        self.iter.g.copy_from_slice(&k.g);
+        self.iter.taut.copy_from_slice(&k.taut);
         self.joint.f_now.copy_from_slice(&k.f);
         self.joint.l2 = k.l2;
         // the sweep reads the tensions from the inner workspace
-        self.theta[..p].copy_from_slice(&self.t);
-        self.ws.set_theta(&self.theta);
+        self.iter.theta[..p].copy_from_slice(&self.iter.t);
+        self.ws.set_theta(&self.iter.theta);
         true
     }
 }
@@ -86,7 +86,7 @@ mod tests {
     fn a_restored_evaluation_is_the_evaluation() {
         let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
         let mut tw = scene.tendon_workspace().expect("workspace");
-        let p = tw.driven.len();
+        let p = tw.tendons.driven.len();
         let mut q = vec![0.0; p];
         q[0] = 0.001;
         q[4] = -0.002;
@@ -96,30 +96,30 @@ mod tests {
         tw.solve_readings(&vec![0.0; p]).expect("valid");
         tw.solve_readings(&q).expect("valid");
         tw.joint.x.copy_from_slice(tw.ws.unknowns_vector());
-        let (x0, t0) = (tw.joint.x.clone(), tw.t.clone());
-        tw.free[2] += 1e-4;
+        let (x0, t0) = (tw.joint.x.clone(), tw.iter.t.clone());
+        tw.iter.free[2] += 1e-4;
         assert!(tw.joint_evaluate().is_some());
         tw.joint_keep();
         // a trial elsewhere, then back
         tw.joint.x[0] += 0.3;
-        tw.t.iter_mut().for_each(|t| *t *= 1.05);
+        tw.iter.t.iter_mut().for_each(|t| *t *= 1.05);
         assert!(tw.joint_evaluate().is_some());
         tw.joint.x.copy_from_slice(&x0);
-        tw.t.copy_from_slice(&t0);
+        tw.iter.t.copy_from_slice(&t0);
         assert!(tw.joint_restore());
         let restored = (
-            tw.lengths.clone(),
-            tw.g.clone(),
-            tw.taut.clone(),
+            tw.iter.lengths.clone(),
+            tw.iter.g.clone(),
+            tw.iter.taut.clone(),
             tw.joint.f_now.clone(),
             tw.joint.l2,
         );
         assert!(tw.joint_factor());
         let (jac_s, jac_m) = (tw.joint.jac_s.clone(), tw.joint.jac_m.clone());
         assert!(tw.joint_evaluate().is_some());
-        assert_eq!(restored.0, tw.lengths);
-        assert_eq!(restored.1, tw.g);
-        assert_eq!(restored.2, tw.taut);
+        assert_eq!(restored.0, tw.iter.lengths);
+        assert_eq!(restored.1, tw.iter.g);
+        assert_eq!(restored.2, tw.iter.taut);
         assert_eq!(restored.3, tw.joint.f_now);
         assert_eq!(restored.4, tw.joint.l2);
         assert!(tw.joint_factor());

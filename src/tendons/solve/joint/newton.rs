@@ -22,7 +22,7 @@ impl TendonWorkspace {
         evaluated: Option<f64>,
     ) -> Result<(), f64> {
         let n = self.ws.unknowns();
-        let p = self.driven.len();
+        let p = self.tendons.driven.len();
         let mut first_step = f64::INFINITY;
         let Some(mut merit) = evaluated.or_else(|| self.joint_evaluate()) else {
             return Err(first_step);
@@ -30,7 +30,7 @@ impl TendonWorkspace {
         self.ref_check();
         let policy = ChordPolicy::of(self.ws.settings().cable_coupling, self.joint.cold);
         for it in 0..JOINT_MAX_ITERATIONS {
-            self.report.iterations = it;
+            self.status.report.iterations = it;
             if merit <= merit_tol {
                 if merit_tol <= 1.0 && self.joint.inner_tol > LOCAL_TOL {
                     // the point was evaluated with loosely settled next holes: confirm
@@ -44,14 +44,14 @@ impl TendonWorkspace {
                         continue;
                     }
                 }
-                if merit_tol <= 1.0 && self.zero_slack_tensions() {
+                if merit_tol <= 1.0 && self.iter.zero_slack_tensions() {
                     // a slack tendon carries exactly nothing (see the nested loop)
                     match self.joint_evaluate() {
                         Some(m) if m <= 1.0 => {}
                         _ => return Err(first_step),
                     }
                 }
-                self.report.status = SolveStatus::Converged;
+                self.status.set(SolveStatus::Converged);
                 return Ok(());
             }
             // a quasi-Newton step with the last Jacobian's inverse, Broyden-updated
@@ -62,7 +62,7 @@ impl TendonWorkspace {
             // set is carried over to the iterate's: `carry`)
             let carry = policy.carry && it == 0;
             let mut chord = self.joint.lu_valid
-                && (self.joint.lu_taut == self.taut
+                && (self.joint.lu_taut == self.iter.taut
                     || (carry && self.joint_carry_to_iterate(n, p)));
             // (a row started from an extrapolated point always tries the chord: on
             // the 443 FTDCR v4 val rows 2 026 -> 2 403 `f64` and 139.2 -> 117.6 dual
@@ -79,7 +79,7 @@ impl TendonWorkspace {
             }
             let l2_before = self.joint.l2;
             self.joint.xs.copy_from_slice(&self.joint.x);
-            self.joint.ts.copy_from_slice(&self.t);
+            self.joint.ts.copy_from_slice(&self.iter.t);
             self.joint_keep();
             let mut accepted = None;
             for fresh in [false, true] {
@@ -93,7 +93,7 @@ impl TendonWorkspace {
                     // back from the failed chord trial to the iterate (its kept
                     // evaluation, `keep`)
                     self.joint.x.copy_from_slice(&self.joint.xs);
-                    self.t.copy_from_slice(&self.joint.ts);
+                    self.iter.t.copy_from_slice(&self.joint.ts);
                     if !self.joint_restore() && self.joint_evaluate().is_none() {
                         return Err(first_step);
                     }
@@ -129,7 +129,7 @@ impl TendonWorkspace {
                         self.joint.x[i] = self.joint.xs[i] + alpha * self.joint.dz[i];
                     }
                     for i in 0..p {
-                        self.t[i] = (self.joint.ts[i] + alpha * self.joint.dz[n + i]).max(0.0);
+                        self.iter.t[i] = (self.joint.ts[i] + alpha * self.joint.dz[n + i]).max(0.0);
                     }
                     let mut evaluated = false;
                     if let Some(m) = self.joint_evaluate() {
@@ -156,7 +156,7 @@ impl TendonWorkspace {
                         }
                         continue;
                     }
-                    if fresh && switched == 0 && self.taut != self.joint.lu_taut {
+                    if fresh && switched == 0 && self.iter.taut != self.joint.lu_taut {
                         // the full step crossed a kink of G (a tendon went slack or
                         // taut): Newton's step from the iterate with the active set
                         // found there, before any backtracking (`joint_switch_step`)

@@ -75,9 +75,9 @@ impl TendonWorkspace {
         };
         rj.at_ref = Some(
             rj.valid
-                && rj.theta == self.theta
+                && rj.theta == self.iter.theta
                 && close(&rj.res, self.ws.residual_vector(), RES_MATCH * tol)
-                && close(&rj.lengths, &self.lengths, LEN_MATCH),
+                && close(&rj.lengths, &self.iter.lengths, LEN_MATCH),
         );
     }
 
@@ -90,7 +90,7 @@ impl TendonWorkspace {
             let jb = &mut self.joint;
             jb.jac_s.copy_from_slice(&jb.rj.jac_s);
             jb.jac_m.copy_from_slice(&jb.rj.jac_m);
-            jb.lu_taut.copy_from_slice(&self.taut);
+            jb.lu_taut.copy_from_slice(&self.iter.taut);
             return self.joint_assemble();
         }
         let ok = self.joint_factor();
@@ -101,8 +101,8 @@ impl TendonWorkspace {
             rj.jac_m.clone_from(&jb.jac_m);
             rj.res.clear();
             rj.res.extend_from_slice(self.ws.residual_vector());
-            rj.lengths.clone_from(&self.lengths);
-            rj.theta.clone_from(&self.theta);
+            rj.lengths.clone_from(&self.iter.lengths);
+            rj.theta.clone_from(&self.iter.theta);
             rj.valid = true;
         }
         ok
