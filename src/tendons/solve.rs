@@ -128,8 +128,10 @@ struct Iterate {
     t: Vec<f64>,
     /// Full parameter vector of the inner workspace: tensions, then `extra`.
     theta: Vec<f64>,
-    /// Path lengths of all cables (m).
+    /// Path lengths of all cables (m), and the length-weighted mean capstan factor of
+    /// each tendon's chords (`Friction::refresh`): what `G` is evaluated with.
     lengths: Vec<f64>,
+    mean_factor: Vec<f64>,
     /// Residual `G` and the taut flags (module docs).
     g: Vec<f64>,
     taut: Vec<bool>,
@@ -137,14 +139,14 @@ struct Iterate {
 
 /// The outcome of the current call: its report, whose status the paths record as
 /// they end and [`Status::conclude`] decides.
-#[derive(Clone)]
+#[derive(Clone, Copy)]
 struct Status {
     report: TendonReport,
     /// A converged solve (or the reference) left a point to start warm from.
     has_solution: bool,
 }
 
-crate::math::warm::warm_by_copy!(TendonReport);
+crate::math::warm::warm_by_copy!(TendonReport, Status);
 
 impl crate::math::warm::WarmCopy for TendonWorkspace {
     /// The state a solve changes; the tendons' configuration, the friction law and
@@ -159,13 +161,21 @@ impl crate::math::warm::WarmCopy for TendonWorkspace {
 impl crate::math::warm::WarmCopy for Iterate {
     fn warm_copy_from(&mut self, src: &Self) {
         crate::math::warm::warm_fields!(self, src,
-            copy: [free, t, theta, lengths, g, taut], keep: []);
+            copy: [free, t, theta, lengths, mean_factor, g, taut], keep: []);
     }
 }
 
-impl crate::math::warm::WarmCopy for Status {
-    fn warm_copy_from(&mut self, src: &Self) {
-        crate::math::warm::warm_fields!(self, src, copy: [report, has_solution], keep: []);
+impl TendonReport {
+    /// Nothing solved or counted yet, with `status`.
+    fn unsolved(status: SolveStatus) -> Self {
+        Self {
+            status,
+            iterations: 0,
+            residual_m: f64::INFINITY,
+            forward_solves: 0,
+            shooting_solves: 0,
+            slack: 0,
+        }
     }
 }
 
@@ -237,7 +247,7 @@ impl TendonWorkspace {
     /// Friction direction state of each driven tendon (-1 pulled in, +1 paid out, 0
     /// rest; in between while turning round under `robot.friction.slide_m`).
     pub fn friction_direction(&self) -> &[f64] {
-        self.friction.direction()
+        &self.friction.sign
     }
     /// Forget the friction's direction memory: every driven tendon at rest (direction
     /// 0) with its last reading 0, as at construction. The next solve's friction
@@ -371,7 +381,7 @@ impl TendonWorkspace {
             if !self.solve_joint() {
                 return false;
             }
-            if self.friction.refresh(&mut self.ws, &self.tendons.driven) {
+            if self.refresh_factors() {
                 return true;
             }
         }
@@ -425,6 +435,18 @@ impl Tendons {
         }
         Ok(())
     }
+
+    /// Tendon `i`'s compliance (m/N) at free length `free` (m) and mean capstan
+    /// factor `mf`: the tangent one at the tension `t` (N) when `taut`, the secant
+    /// one when slack (the generalized Jacobian's diagonal, module docs of `joint`).
+    fn compliance(&self, i: usize, taut: bool, free: f64, t: f64, mf: f64) -> f64 {
+        let mech = &self.mech[i];
+        if taut {
+            mech.tangent_compliance(free, t, mf)
+        } else {
+            mech.compliance(free, mf)
+        }
+    }
 }
 
 impl Iterate {
@@ -433,14 +455,13 @@ impl Iterate {
         self.g.iter().fold(0.0, |m, g| m.max(g.abs()))
     }
 
-    /// `G` and the taut flags from `t` and `lengths` (module docs), with the
-    /// friction's length-weighted mean factor of each tendon.
-    fn update_g(&mut self, tendons: &Tendons, mean_factor: &[f64]) {
+    /// `G` and the taut flags from `t`, `lengths` and `mean_factor` (module docs).
+    fn update_g(&mut self, tendons: &Tendons) {
         for (i, &j) in tendons.driven.iter().enumerate() {
             let m = &tendons.mech[i];
-            let covered = m.covered(self.free[i], self.t[i], mean_factor[i]);
+            let covered = m.covered(self.free[i], self.t[i], self.mean_factor[i]);
             let stretch_gap = covered - self.lengths[j];
-            let a = m.compliance(self.free[i], mean_factor[i]) + tendons.geo[i];
+            let a = m.compliance(self.free[i], self.mean_factor[i]) + tendons.geo[i];
             let slack_arm = a * self.t[i];
             // taut branch when the constitutive gap is the smaller argument of min
             self.taut[i] = stretch_gap <= slack_arm && (self.t[i] > 0.0 || stretch_gap < 0.0);
@@ -464,14 +485,7 @@ impl Iterate {
 impl Status {
     /// A call starts as not (yet) converged, with nothing counted.
     fn begin(&mut self) {
-        self.report = TendonReport {
-            status: SolveStatus::MaxIterations,
-            iterations: 0,
-            residual_m: f64::INFINITY,
-            forward_solves: 0,
-            shooting_solves: 0,
-            slack: 0,
-        };
+        self.report = TendonReport::unsolved(SolveStatus::MaxIterations);
     }
 
     /// Record the status a path ended with (the call's, unless a later path or

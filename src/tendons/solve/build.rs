@@ -100,20 +100,14 @@ impl TendonWorkspace {
                 t: mech.iter().map(|m| m.pretension_n).collect(),
                 theta: vec![0.0; np],
                 lengths: vec![0.0; nc],
+                mean_factor: vec![1.0; p],
                 g: vec![0.0; p],
                 taut: vec![true; p],
             },
             friction,
             nested: nested::NestedBufs::new(p, np, nc),
             status: Status {
-                report: TendonReport {
-                    status: SolveStatus::NonFinite,
-                    iterations: 0,
-                    residual_m: f64::INFINITY,
-                    forward_solves: 0,
-                    shooting_solves: 0,
-                    slack: 0,
-                },
+                report: TendonReport::unsolved(SolveStatus::NonFinite),
                 has_solution: false,
             },
             tendons: Tendons {

@@ -2,6 +2,7 @@
 //! each driven tendon's sliding direction from its readings, and the chord factors
 //! of the last shape, refreshed after each joint solve (the lagged coupling).
 
+use super::TendonWorkspace;
 use crate::robot::FrictionLaw;
 use crate::statics::Workspace;
 use nalgebra::Vector3;
@@ -13,12 +14,10 @@ pub(super) struct Friction {
     law: FrictionLaw,
     /// Direction state (-1 pulled in, +1 paid out, 0 at rest, between while turning
     /// round under the pre-sliding law) and the reading it was last moved from.
-    sign: Vec<f64>,
+    pub(super) sign: Vec<f64>,
     last_q: Vec<f64>,
-    /// Chord factors (scratch of `refresh`) and their length-weighted mean, the
-    /// factor of the tendon's stretch.
+    /// Chord factors (scratch of `refresh`).
     factors: Vec<Vec<f64>>,
-    pub(super) mean_factor: Vec<f64>,
 }
 
 impl Friction {
@@ -31,12 +30,7 @@ impl Friction {
             sign: vec![0.0; p],
             last_q: vec![0.0; p],
             factors,
-            mean_factor: vec![1.0; p],
         }
-    }
-
-    pub(super) fn direction(&self) -> &[f64] {
-        &self.sign
     }
 
     /// Every tendon at rest with its last reading 0 (as at construction).
@@ -56,8 +50,14 @@ impl Friction {
     }
 
     /// Capstan factors of the driven cables `driven` from the current shape of `ws`
-    /// (set there when they moved); `true` when they did not change.
-    pub(super) fn refresh(&mut self, ws: &mut Workspace, driven: &[usize]) -> bool {
+    /// (set there when they moved), and each one's length-weighted mean, the factor
+    /// of its stretch (`mean_factor`); `true` when they did not change.
+    pub(super) fn refresh(
+        &mut self,
+        ws: &mut Workspace,
+        driven: &[usize],
+        mean_factor: &mut [f64],
+    ) -> bool {
         if self.law.is_frictionless() {
             return true;
         }
@@ -78,7 +78,7 @@ impl Friction {
                 weighted += l * fk;
                 prev = *h;
             }
-            self.mean_factor[i] = if total > 0.0 { weighted / total } else { 1.0 };
+            mean_factor[i] = if total > 0.0 { weighted / total } else { 1.0 };
             if changed {
                 // (setting them invalidates the last pass: only when they moved)
                 ws.set_chord_factors(j, &self.factors[i]);
@@ -89,9 +89,17 @@ impl Friction {
     }
 }
 
+impl TendonWorkspace {
+    /// [`Friction::refresh`] at the current shape, into the iterate's mean factors.
+    pub(super) fn refresh_factors(&mut self) -> bool {
+        let (driven, mf) = (&self.tendons.driven, &mut self.iter.mean_factor);
+        self.friction.refresh(&mut self.ws, driven, mf)
+    }
+}
+
 impl crate::math::warm::WarmCopy for Friction {
     fn warm_copy_from(&mut self, src: &Self) {
         crate::math::warm::warm_fields!(self, src,
-            copy: [sign, last_q, factors, mean_factor], keep: [law]);
+            copy: [sign, last_q, factors], keep: [law]);
     }
 }

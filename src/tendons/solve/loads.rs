@@ -117,7 +117,7 @@ impl TendonWorkspace {
         }
         nb.sens_fresh = true;
         // the generalized Jacobian of the Newton step at this point (same rows)
-        if !nb.factor_tension_jacobian(tendons, iter, &self.friction.mean_factor) {
+        if !nb.factor_tension_jacobian(tendons, iter) {
             return false;
         }
         for k in 0..e {

@@ -49,7 +49,7 @@ impl TendonWorkspace {
         let mut need_fresh = true;
         for it in 0..self.tendon_settings().max_iterations {
             self.status.report.iterations = it;
-            let friction_settled = self.friction.refresh(&mut self.ws, &self.tendons.driven);
+            let friction_settled = self.refresh_factors();
             if !friction_settled {
                 // the factors moved (lagged friction coupling): re-solve at the same
                 // tensions so that G belongs to the new factors
@@ -77,8 +77,7 @@ impl TendonWorkspace {
                 if !self.nested.sens_fresh && !self.evaluate(Start::Warm, true) {
                     return self.finish();
                 }
-                let mf = &self.friction.mean_factor;
-                if !self.nested.newton_step(&self.tendons, &self.iter, mf) {
+                if !self.nested.newton_step(&self.tendons, &self.iter) {
                     self.status.set(SolveStatus::IllConditioned);
                     return self.finish();
                 }
@@ -125,9 +124,7 @@ impl TendonWorkspace {
             }
         }
         self.status.report.iterations = self.tendon_settings().max_iterations;
-        if self.iter.merit() <= self.tendon_settings().tolerance_m
-            && self.friction.refresh(&mut self.ws, &self.tendons.driven)
-        {
+        if self.iter.merit() <= self.tendon_settings().tolerance_m && self.refresh_factors() {
             self.status.set(SolveStatus::Converged);
         }
         self.finish()
@@ -170,7 +167,7 @@ impl TendonWorkspace {
             self.ws.cable_lengths_into(&mut iter.lengths);
             self.nested.sens_fresh = false;
         }
-        iter.update_g(&self.tendons, &self.friction.mean_factor);
+        iter.update_g(&self.tendons);
         true
     }
 }
@@ -209,8 +206,8 @@ impl NestedBufs {
     }
 
     /// Semi-smooth Newton step `J step = -G` with the generalized Jacobian.
-    fn newton_step(&mut self, tendons: &Tendons, iter: &Iterate, mean_factor: &[f64]) -> bool {
-        if !self.factor_tension_jacobian(tendons, iter, mean_factor) {
+    fn newton_step(&mut self, tendons: &Tendons, iter: &Iterate) -> bool {
+        if !self.factor_tension_jacobian(tendons, iter) {
             return false;
         }
         for (s, g) in self.step.iter_mut().zip(&iter.g) {
@@ -226,23 +223,19 @@ impl NestedBufs {
     /// `c_i e_i - dl_i/dT` when taut, `(c_i + a_i) e_i` when slack (module docs of
     /// the parent). `false` when it is singular. Also the load-estimation
     /// sensitivities' matrix (`loads` submodule).
-    pub(super) fn factor_tension_jacobian(
-        &mut self,
-        tendons: &Tendons,
-        iter: &Iterate,
-        mean_factor: &[f64],
-    ) -> bool {
+    pub(super) fn factor_tension_jacobian(&mut self, tendons: &Tendons, iter: &Iterate) -> bool {
         let p = tendons.driven.len();
         let np = iter.theta.len();
         let a = self.lu.matrix_mut();
         for i in 0..p {
             let j = tendons.driven[i];
-            let (mech, f, mf) = (&tendons.mech[i], iter.free[i], mean_factor[i]);
-            let c = if iter.taut[i] {
-                mech.tangent_compliance(f, iter.t[i], mf)
-            } else {
-                mech.compliance(f, mf)
-            };
+            let c = tendons.compliance(
+                i,
+                iter.taut[i],
+                iter.free[i],
+                iter.t[i],
+                iter.mean_factor[i],
+            );
             for k in 0..p {
                 a[i * p + k] = if iter.taut[i] {
                     -self.sens[j * np + k] + if i == k { c } else { 0.0 }

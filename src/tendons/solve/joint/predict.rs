@@ -130,13 +130,12 @@ impl TendonWorkspace {
         {
             return RowStart::Plain;
         }
-        self.iter
-            .update_g(&self.tendons, &self.friction.mean_factor);
+        self.iter.update_g(&self.tendons);
         let tol = self.ws.report().tolerance;
         let tol_g = self.tendon_settings().tolerance_m;
         let g_max = self.iter.merit();
         self.joint.f_now[n..].copy_from_slice(&self.iter.g);
-        let (l2_0, settle0) = self.joint_norms(tol);
+        let (l2_0, settle0) = self.joint.norms(tol, self.ws.settings());
         let jb = &mut self.joint;
         jb.l2 = l2_0;
         let r_max = jb.f_now[..n].iter().fold(0.0f64, |a, r| a.max(r.abs()));
@@ -160,7 +159,7 @@ impl TendonWorkspace {
         }
         // evaluate there (the step from z_1 is Broyden's secant pair when kept)
         jb.f_prev.copy_from_slice(&jb.f_now);
-        self.joint_keep();
+        self.joint.keep(&self.iter);
         let jb = &mut self.joint;
         jb.xs.copy_from_slice(&jb.x0);
         jb.ts.copy_from_slice(&jb.t0);
@@ -176,7 +175,7 @@ impl TendonWorkspace {
         match ev {
             Some(mp) if self.joint.l2 < l2_0 => {
                 if self.joint.lu_valid {
-                    self.joint_broyden(n, p);
+                    self.joint.broyden(n, &self.iter.t, self.ws.settings());
                 }
                 self.joint.predicted = true;
                 RowStart::Evaluated(mp)
@@ -188,7 +187,7 @@ impl TendonWorkspace {
                 self.joint_inner_tolerance(0.0);
                 self.iter.t.copy_from_slice(&self.joint.t0);
                 self.joint.x.copy_from_slice(&self.joint.x0);
-                if merit0 > 1.0 && self.joint_restore() {
+                if merit0 > 1.0 && self.joint.restore(&mut self.ws, &mut self.iter) {
                     return RowStart::Evaluated(merit0);
                 }
                 RowStart::Plain
