@@ -30,9 +30,8 @@
 //! respect to the shape are not in the Jacobian (they are second order in `mu`
 //! times the change of wrap angle per step).
 
-use super::{FrictionLaw, TendonMechanics};
+use super::TendonMechanics;
 use crate::error::ModelError;
-use crate::math::DenseLu;
 pub use crate::settings::TendonSettings;
 use crate::statics::{SolveStatus, Start, Workspace};
 use nalgebra::Vector3;
@@ -60,6 +59,8 @@ mod build;
 // The rollback of a failed solve.
 mod rollback;
 use rollback::Rollback;
+// The capstan friction's state per tendon.
+mod friction;
 
 /// Outcome of one solve from readings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -80,10 +81,27 @@ pub struct TendonReport {
     pub slack: usize,
 }
 
-/// A robot driven by actuator readings: allocate once, solve every row.
+/// A robot driven by actuator readings: allocate once, solve every row. Its state
+/// is in parts, each file working on the parts it names (docs/architecture.md).
 #[derive(Clone)]
 pub struct TendonWorkspace {
+    /// The inner shooting workspace (its tensions are the driven tendons').
     ws: Workspace,
+    tendons: Tendons,
+    iter: Iterate,
+    friction: friction::Friction,
+    nested: nested::NestedBufs,
+    joint: joint::JointBufs,
+    status: Status,
+    /// The warm state to return to after a solve that did not converge.
+    rollback: Rollback,
+    /// The current call's budget ([`TendonSettings::max_passes`], `time_budget_s`).
+    budget: budget::Budget,
+}
+
+/// The driven tendons: configuration, fixed once the reference is solved.
+#[derive(Clone)]
+struct Tendons {
     /// Cable index of each displacement-driven tendon.
     driven: Vec<usize>,
     mech: Vec<TendonMechanics>,
@@ -91,62 +109,73 @@ pub struct TendonWorkspace {
     columns: Vec<String>,
     /// `L0` per driven tendon (m).
     free0: Vec<f64>,
-    /// `L_f = L0 - q` for the current readings (m).
-    free: Vec<f64>,
     /// Scale `a_i` of the slack branch (m/N) without the tendon's own compliance.
     geo: Vec<f64>,
-    /// Tensions of the driven tendons (N) and the trial point.
-    t: Vec<f64>,
-    t_trial: Vec<f64>,
-    /// Taut flags, and before the last step (an active-set change needs a fresh
-    /// Jacobian).
-    taut: Vec<bool>,
-    taut_before: Vec<bool>,
-    /// Residual `G` and Newton step.
-    g: Vec<f64>,
-    step: Vec<f64>,
-    /// Full parameter vector of the inner workspace: tensions, then `extra`.
-    theta: Vec<f64>,
+    /// Extra load parameters (after the tensions in `Iterate::theta`).
     n_extra: usize,
-    /// `dl/dtheta` (`c x (p + extra)`) and the lengths of all cables.
-    sens: Vec<f64>,
-    lengths: Vec<f64>,
-    lu: DenseLu,
-    /// `sens` is from the current point (else from an earlier one: chord steps).
-    sens_fresh: bool,
-    /// Friction: the law ([`FrictionLaw`]), per-tendon direction state (-1 pulled
-    /// in, +1 paid out, 0 at rest, between while turning round under the
-    /// pre-sliding law), last readings, factor scratch and length-weighted mean
-    /// factor.
-    friction: FrictionLaw,
-    sign: Vec<f64>,
-    last_q: Vec<f64>,
-    factors: Vec<Vec<f64>>,
-    mean_factor: Vec<f64>,
-    has_solution: bool,
     /// Scaled shooting unknowns of the reference equilibrium (zero readings, the
     /// pretensions): where a cold solve's joint path starts.
     x_ref: Vec<f64>,
-    report: TendonReport,
-    joint: joint::JointBufs,
-    /// The warm state to return to after a solve that did not converge.
-    rollback: Rollback,
-    /// The current call's budget ([`TendonSettings::max_passes`], `time_budget_s`).
-    budget: budget::Budget,
 }
 
-crate::math::warm::warm_by_copy!(TendonReport);
+/// The point of the tension iterate: the free lengths it belongs to, the tensions,
+/// the path lengths evaluated there and the residual `G` with its active set.
+#[derive(Clone)]
+struct Iterate {
+    /// `L_f = L0 - q` for the current readings (m).
+    free: Vec<f64>,
+    /// Tensions of the driven tendons (N).
+    t: Vec<f64>,
+    /// Full parameter vector of the inner workspace: tensions, then `extra`.
+    theta: Vec<f64>,
+    /// Path lengths of all cables (m), and the length-weighted mean capstan factor of
+    /// each tendon's chords (`Friction::refresh`): what `G` is evaluated with.
+    lengths: Vec<f64>,
+    mean_factor: Vec<f64>,
+    /// Residual `G` and the taut flags (module docs).
+    g: Vec<f64>,
+    taut: Vec<bool>,
+}
+
+/// The outcome of the current call: its report, whose status the paths record as
+/// they end and [`Status::conclude`] decides.
+#[derive(Clone, Copy)]
+struct Status {
+    report: TendonReport,
+    /// A converged solve (or the reference) left a point to start warm from.
+    has_solution: bool,
+}
+
+crate::math::warm::warm_by_copy!(TendonReport, Status);
 
 impl crate::math::warm::WarmCopy for TendonWorkspace {
-    /// The state a solve changes; the tendons' mechanics, columns, reference and the
-    /// rollback's own copy are configuration and stay as they are.
+    /// The state a solve changes; the tendons' configuration, the friction law and
+    /// the rollback's own copy stay as they are.
     fn warm_copy_from(&mut self, src: &Self) {
         crate::math::warm::warm_fields!(self, src, copy: [
-            ws, free, t, t_trial, taut, taut_before, g, step, theta, sens, lengths, lu,
-            sens_fresh, sign, last_q, factors, mean_factor, has_solution, report, joint,
-        ], keep: [
-            driven, mech, columns, free0, geo, n_extra, friction, x_ref, rollback, budget,
-        ]);
+            ws, iter, friction, nested, status, joint,
+        ], keep: [tendons, rollback, budget]);
+    }
+}
+
+impl crate::math::warm::WarmCopy for Iterate {
+    fn warm_copy_from(&mut self, src: &Self) {
+        crate::math::warm::warm_fields!(self, src,
+            copy: [free, t, theta, lengths, mean_factor, g, taut], keep: []);
+    }
+}
+
+impl TendonReport {
+    /// Nothing solved or counted yet, with `status`.
+    fn unsolved(status: SolveStatus) -> Self {
+        Self {
+            status,
+            iterations: 0,
+            residual_m: f64::INFINITY,
+            forward_solves: 0,
+            shooting_solves: 0,
+            slack: 0,
+        }
     }
 }
 
@@ -169,31 +198,31 @@ impl TendonWorkspace {
     }
     /// Cable indices of the displacement-driven tendons, in reading order.
     pub fn driven(&self) -> &[usize] {
-        &self.driven
+        &self.tendons.driven
     }
     /// Readings column of each driven tendon.
     pub fn columns(&self) -> &[String] {
-        &self.columns
+        &self.tendons.columns
     }
     /// Mechanics of each driven tendon (stiffness, series spring, pretension).
     pub fn mechanics(&self) -> &[TendonMechanics] {
-        &self.mech
+        &self.tendons.mech
     }
     /// Free length `L0` of each driven tendon at reading 0 (m).
     pub fn rest_free_lengths(&self) -> &[f64] {
-        &self.free0
+        &self.tendons.free0
     }
     /// Tensions of the driven tendons at the last solve (N).
     pub fn tensions(&self) -> &[f64] {
-        &self.t
+        &self.iter.t
     }
     /// Whether each driven tendon is taut at the last solve.
     pub fn taut(&self) -> &[bool] {
-        &self.taut
+        &self.iter.taut
     }
     /// Report of the last solve.
     pub fn report(&self) -> &TendonReport {
-        &self.report
+        &self.status.report
     }
     /// The inner shooting workspace (shape, lengths, solution).
     pub fn workspace(&self) -> &Workspace {
@@ -213,28 +242,27 @@ impl TendonWorkspace {
     }
     /// Path lengths of all cables at the last solve (m).
     pub fn lengths(&self) -> &[f64] {
-        &self.lengths
+        &self.iter.lengths
     }
     /// Friction direction state of each driven tendon (-1 pulled in, +1 paid out, 0
     /// rest; in between while turning round under `robot.friction.slide_m`).
     pub fn friction_direction(&self) -> &[f64] {
-        &self.sign
+        &self.friction.sign
     }
     /// Forget the friction's direction memory: every driven tendon at rest (direction
     /// 0) with its last reading 0, as at construction. The next solve's friction
     /// then depends on its own readings only, not on the rows solved before.
     pub fn forget_direction_memory(&mut self) {
-        self.sign.fill(0.0);
-        self.last_q.fill(0.0);
+        self.friction.forget_direction_memory();
     }
 
     /// Values of the extra load parameters (after the tensions).
     pub fn set_extra(&mut self, extra: &[f64]) {
         self.apply_rollback();
-        let p = self.driven.len();
+        let p = self.tendons.driven.len();
         self.joint.forget_history();
-        for (k, v) in extra.iter().enumerate().take(self.n_extra) {
-            self.theta[p + k] = *v;
+        for (k, v) in extra.iter().enumerate().take(self.tendons.n_extra) {
+            self.iter.theta[p + k] = *v;
         }
     }
 
@@ -244,6 +272,135 @@ impl TendonWorkspace {
         self.solve_readings_from(readings_m, Start::Warm)
     }
 
+    /// [`TendonWorkspace::solve_readings`] with a chosen start (`Cold` restarts the
+    /// shooting from the straight rod and the tensions from the pretensions).
+    /// A solve that does not converge is rolled back before the next one
+    /// ([`TendonWorkspace::set_rollback`]); invalid readings are an error that
+    /// changes nothing.
+    pub fn solve_readings_from(
+        &mut self,
+        readings_m: &[f64],
+        start: Start,
+    ) -> Result<TendonReport, ModelError> {
+        self.tendons.check_readings(readings_m)?;
+        if self.rollback.enabled {
+            if self.rollback.pending {
+                self.apply_rollback();
+            } else {
+                self.keep_state();
+            }
+        }
+        let report = self.solve_checked(readings_m, start);
+        self.rollback.pending = self.rollback.enabled && !report.status.is_converged();
+        Ok(report)
+    }
+
+    /// The solve of checked readings.
+    fn solve_checked(&mut self, readings_m: &[f64], start: Start) -> TendonReport {
+        let (tendons, iter) = (&self.tendons, &mut self.iter);
+        self.budget.begin(self.ws.settings());
+        // the free lengths the current point belongs to (joint path's continuation)
+        self.joint.free_prev.copy_from_slice(&iter.free);
+        for (i, reading) in readings_m.iter().enumerate() {
+            let q = reading - tendons.mech[i].zero_offset_m;
+            iter.free[i] = tendons.free0[i] - q;
+            self.friction.follow_reading(i, q);
+        }
+        let start = if self.status.has_solution {
+            start
+        } else {
+            Start::Cold
+        };
+        if start == Start::Cold {
+            for (t, m) in iter.t.iter_mut().zip(&tendons.mech) {
+                *t = m.pretension_n;
+            }
+        }
+        self.status.begin();
+        // the warm fast path (frictionless, or friction factors that stay put)
+        self.joint.cold = start == Start::Cold;
+        if start == Start::Warm && self.tendon_settings().joint_newton && self.solve_joint_settled()
+        {
+            self.joint.at_solution = true;
+            return self.finish();
+        }
+        self.joint_failed();
+        if self.budget.spent {
+            return self.finish();
+        }
+        // a cold start takes the same path from the reference equilibrium (zero
+        // readings, the pretensions: solved once at construction, so the start does
+        // not depend on earlier rows), continued in the readings by `solve_joint`'s
+        // adaptive steps; when that hands back, the nested method's cold solve from
+        // the straight rod follows. Why: on the FTDCR v4 val rows the nested cold
+        // solve costs ~1e5 `f64` right-hand sides a row (its shooting continuation
+        // and branch checks at every tension iterate), the path from the reference
+        // a few thousand. Under a budget a warm row that the joint path did not
+        // reach takes this path too, with what is left of the budget (`budget`
+        // module docs: a row cut short is rolled back, and the rows after it
+        // then start a step farther away).
+        let from_ref = start == Start::Cold || self.budget.limited;
+        if from_ref && self.tendon_settings().joint_newton && !self.tendons.x_ref.is_empty() {
+            if start == Start::Warm {
+                self.budget_second_chance();
+            }
+            self.joint.free_prev.copy_from_slice(&self.tendons.free0);
+            self.ws.adopt_unknowns(&self.tendons.x_ref, false);
+            self.joint.forget_jacobian();
+            self.joint.rj.pending = true;
+            if self.solve_joint_settled() {
+                self.joint.at_solution = true;
+                return self.finish();
+            }
+            self.joint_failed();
+        }
+        if self.budget.ends_call() {
+            return self.finish();
+        }
+        self.solve_nested(start)
+    }
+
+    /// The joint path did not reach the row: whatever status a step of it left
+    /// (an intermediate continuation step or a friction round ends `Converged` at
+    /// its own, looser target) is not the row's. Without this a budgeted call that
+    /// stopped after such a step reported `converged` at a point that is not an
+    /// equilibrium, kept it as warm state and started the next rows from there
+    /// (FTDCR v4 val line 72 under `max_passes = 16`: the 60 rows after it ended
+    /// `budget_exhausted`).
+    fn joint_failed(&mut self) {
+        self.joint.at_solution = false;
+        self.status.set(SolveStatus::MaxIterations);
+    }
+
+    /// The joint path, then the capstan factors of its shape; while they move, the
+    /// joint path again from there: the lagged friction coupling solved as a fixed
+    /// point, at most [`FRICTION_ROUNDS`] joint solves. `true` when the last one
+    /// converged with factors that stayed put (at once without friction).
+    fn solve_joint_settled(&mut self) -> bool {
+        for _ in 0..FRICTION_ROUNDS {
+            if !self.solve_joint() {
+                return false;
+            }
+            if self.refresh_factors() {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The end of every call: its status decided ([`Status::conclude`]), and a
+    /// converged row kept for the next rows' predictor.
+    fn finish(&mut self) -> TendonReport {
+        let report = self.status.conclude(self.budget.spent, &self.iter);
+        if report.status.is_converged() {
+            let (x, it) = (self.ws.unknowns_vector(), &self.iter);
+            self.joint.push_history(x, &it.t, &it.free);
+        }
+        report
+    }
+}
+
+impl Tendons {
     /// Check readings: one per driven tendon, finite, leaving a positive free length.
     fn check_readings(&self, q: &[f64]) -> Result<(), ModelError> {
         if q.len() != self.driven.len() {
@@ -279,163 +436,32 @@ impl TendonWorkspace {
         Ok(())
     }
 
-    /// [`TendonWorkspace::solve_readings`] with a chosen start (`Cold` restarts the
-    /// shooting from the straight rod and the tensions from the pretensions).
-    /// A solve that does not converge is rolled back before the next one
-    /// ([`TendonWorkspace::set_rollback`]); invalid readings are an error that
-    /// changes nothing.
-    pub fn solve_readings_from(
-        &mut self,
-        readings_m: &[f64],
-        start: Start,
-    ) -> Result<TendonReport, ModelError> {
-        self.check_readings(readings_m)?;
-        if self.rollback.enabled {
-            if self.rollback.pending {
-                self.apply_rollback();
-            } else {
-                self.keep_state();
-            }
-        }
-        let report = self.solve_checked(readings_m, start);
-        self.rollback.pending = self.rollback.enabled && !report.status.is_converged();
-        Ok(report)
-    }
-
-    /// The solve of checked readings.
-    fn solve_checked(&mut self, readings_m: &[f64], start: Start) -> TendonReport {
-        let p = self.driven.len();
-        self.budget_begin();
-        // the free lengths the current point belongs to (joint path's continuation)
-        self.joint.free_prev.copy_from_slice(&self.free);
-        for (i, reading) in readings_m.iter().enumerate() {
-            let q = reading - self.mech[i].zero_offset_m;
-            self.free[i] = self.free0[i] - q;
-            // friction direction state: the way the tendon last moved
-            // (`FrictionLaw::next_direction`; frictionless, it stays 0)
-            let (s, moved) = self
-                .friction
-                .next_direction(self.sign[i], q - self.last_q[i]);
-            self.sign[i] = s;
-            if moved {
-                self.last_q[i] = q;
-            }
-        }
-        let start = if self.has_solution {
-            start
+    /// Tendon `i`'s compliance (m/N) at free length `free` (m) and mean capstan
+    /// factor `mf`: the tangent one at the tension `t` (N) when `taut`, the secant
+    /// one when slack (the generalized Jacobian's diagonal, module docs of `joint`).
+    fn compliance(&self, i: usize, taut: bool, free: f64, t: f64, mf: f64) -> f64 {
+        let mech = &self.mech[i];
+        if taut {
+            mech.tangent_compliance(free, t, mf)
         } else {
-            Start::Cold
-        };
-        if start == Start::Cold {
-            for i in 0..p {
-                self.t[i] = self.mech[i].pretension_n;
-            }
+            mech.compliance(free, mf)
         }
-        self.report = TendonReport {
-            status: SolveStatus::MaxIterations,
-            iterations: 0,
-            residual_m: f64::INFINITY,
-            forward_solves: 0,
-            shooting_solves: 0,
-            slack: 0,
-        };
-        // the warm fast path (frictionless, or friction factors that stay put)
-        self.joint.cold = start == Start::Cold;
-        if start == Start::Warm && self.tendon_settings().joint_newton && self.solve_joint_settled()
-        {
-            self.joint.at_solution = true;
-            return self.finish();
-        }
-        self.joint_failed();
-        if self.budget.spent {
-            return self.finish();
-        }
-        // a cold start takes the same path from the reference equilibrium (zero
-        // readings, the pretensions: solved once at construction, so the start does
-        // not depend on earlier rows), continued in the readings by `solve_joint`'s
-        // adaptive steps; when that hands back, the nested method's cold solve from
-        // the straight rod follows. Why: on the FTDCR v4 val rows the nested cold
-        // solve costs ~1e5 `f64` right-hand sides a row (its shooting continuation
-        // and branch checks at every tension iterate), the path from the reference
-        // a few thousand. Under a budget a warm row that the joint path did not
-        // reach takes this path too, with what is left of the budget (`budget`
-        // module docs: a row cut short is rolled back, and the rows after it
-        // then start a step farther away).
-        let from_ref = start == Start::Cold || self.budget.limited;
-        if from_ref && self.tendon_settings().joint_newton && !self.x_ref.is_empty() {
-            if start == Start::Warm {
-                self.budget_second_chance();
-            }
-            self.joint.free_prev.copy_from_slice(&self.free0);
-            self.ws.adopt_unknowns(&self.x_ref, false);
-            self.joint.forget_jacobian();
-            self.joint.rj.pending = true;
-            if self.solve_joint_settled() {
-                self.joint.at_solution = true;
-                return self.finish();
-            }
-            self.joint_failed();
-        }
-        if self.budget_ends_call() {
-            return self.finish();
-        }
-        self.solve_nested(start)
     }
+}
 
-    /// The joint path did not reach the row: whatever status a step of it left
-    /// (an intermediate continuation step or a friction round ends `Converged` at
-    /// its own, looser target) is not the row's. Without this a budgeted call that
-    /// stopped after such a step reported `converged` at a point that is not an
-    /// equilibrium, kept it as warm state and started the next rows from there
-    /// (FTDCR v4 val line 72 under `max_passes = 16`: the 60 rows after it ended
-    /// `budget_exhausted`).
-    fn joint_failed(&mut self) {
-        self.joint.at_solution = false;
-        self.report.status = SolveStatus::MaxIterations;
-    }
-
-    /// The joint path, then the capstan factors of its shape; while they move, the
-    /// joint path again from there: the lagged friction coupling solved as a fixed
-    /// point, at most [`FRICTION_ROUNDS`] joint solves. `true` when the last one
-    /// converged with factors that stayed put (at once without friction).
-    fn solve_joint_settled(&mut self) -> bool {
-        for _ in 0..FRICTION_ROUNDS {
-            if !self.solve_joint() {
-                return false;
-            }
-            if self.refresh_factors() {
-                return true;
-            }
-        }
-        false
-    }
-
-    fn finish(&mut self) -> TendonReport {
-        if self.budget.spent && !self.report.status.is_converged() {
-            self.report.status = SolveStatus::BudgetExhausted;
-        }
-        if self.report.status.is_converged() {
-            self.joint
-                .push_history(self.ws.unknowns_vector(), &self.t, &self.free);
-        }
-        self.report.residual_m = self.merit();
-        self.report.slack = self.taut.iter().filter(|t| !**t).count();
-        self.has_solution = self.report.status.is_converged() || self.has_solution;
-        self.report
-    }
-
+impl Iterate {
+    /// `max_i |G_i|` (m).
     fn merit(&self) -> f64 {
         self.g.iter().fold(0.0, |m, g| m.max(g.abs()))
     }
 
-    /// `G` and the taut flags from `t` and `lengths` (module docs).
-    fn update_g(&mut self) {
-        for i in 0..self.driven.len() {
-            let j = self.driven[i];
-            let m = &self.mech[i];
+    /// `G` and the taut flags from `t`, `lengths` and `mean_factor` (module docs).
+    fn update_g(&mut self, tendons: &Tendons) {
+        for (i, &j) in tendons.driven.iter().enumerate() {
+            let m = &tendons.mech[i];
             let covered = m.covered(self.free[i], self.t[i], self.mean_factor[i]);
             let stretch_gap = covered - self.lengths[j];
-            let a = m.compliance(self.free[i], self.mean_factor[i]) + self.geo[i];
+            let a = m.compliance(self.free[i], self.mean_factor[i]) + tendons.geo[i];
             let slack_arm = a * self.t[i];
             // taut branch when the constitutive gap is the smaller argument of min
             self.taut[i] = stretch_gap <= slack_arm && (self.t[i] > 0.0 || stretch_gap < 0.0);
@@ -454,38 +480,30 @@ impl TendonWorkspace {
         }
         changed
     }
+}
 
-    /// Capstan factors from the current shape; `true` when they did not change.
-    fn refresh_factors(&mut self) -> bool {
-        if self.friction.is_frictionless() {
-            return true;
+impl Status {
+    /// A call starts as not (yet) converged, with nothing counted.
+    fn begin(&mut self) {
+        self.report = TendonReport::unsolved(SolveStatus::MaxIterations);
+    }
+
+    /// Record the status a path ended with (the call's, unless a later path or
+    /// [`Status::conclude`] replaces it).
+    fn set(&mut self, status: SolveStatus) {
+        self.report.status = status;
+    }
+
+    /// The call's status, decided here once its paths have ended: the last path's,
+    /// except that a call whose budget was spent before it converged ends
+    /// `BudgetExhausted`; with the residual and slack count of the point `iter`.
+    fn conclude(&mut self, budget_spent: bool, iter: &Iterate) -> TendonReport {
+        if budget_spent && !self.report.status.is_converged() {
+            self.report.status = SolveStatus::BudgetExhausted;
         }
-        let axis = self.ws.robot().base_rotation() * Vector3::z();
-        let mut settled = true;
-        for i in 0..self.driven.len() {
-            let j = self.driven[i];
-            let base = self.ws.base_hole_world(j);
-            let holes = self.ws.cable_holes(j);
-            let f = &mut self.factors[i];
-            self.friction
-                .chord_factors(self.sign[i], &axis, &base, holes, f);
-            let old = self.ws.chord_factors(j);
-            let changed = old.iter().zip(f.iter()).any(|(a, b)| (a - b).abs() > 1e-13);
-            // length-weighted mean factor of the chords, for the stretch
-            let (mut prev, mut total, mut weighted) = (base, 0.0, 0.0);
-            for (h, fk) in holes.iter().zip(f.iter()) {
-                let l = (h - prev).norm();
-                total += l;
-                weighted += l * fk;
-                prev = *h;
-            }
-            self.mean_factor[i] = if total > 0.0 { weighted / total } else { 1.0 };
-            if changed {
-                // (setting them invalidates the last pass: only when they moved)
-                self.ws.set_chord_factors(j, &self.factors[i]);
-                settled = false;
-            }
-        }
-        settled
+        self.report.residual_m = iter.merit();
+        self.report.slack = iter.taut.iter().filter(|t| !**t).count();
+        self.has_solution = self.report.status.is_converged() || self.has_solution;
+        self.report
     }
 }

@@ -17,6 +17,7 @@
 //! [`TendonSettings::time_budget_s`]: crate::settings::TendonSettings::time_budget_s
 
 use super::TendonWorkspace;
+use crate::settings::{SolverSettings, TendonSettings};
 use std::time::{Duration, Instant};
 
 /// Where the current call stands against its budget (set at the start of every
@@ -31,11 +32,11 @@ pub(super) struct Budget {
     pub(super) spent: bool,
 }
 
-impl TendonWorkspace {
-    /// Start the call's budget.
-    pub(super) fn budget_begin(&mut self) {
-        let s = self.tendon_settings();
-        self.budget = Budget {
+impl Budget {
+    /// Start the call's budget under `settings`.
+    pub(super) fn begin(&mut self, settings: &SolverSettings) {
+        let s = &settings.tendons;
+        *self = Budget {
             limited: s.max_passes.is_some() || s.time_budget_s.is_some(),
             deadline: s
                 .time_budget_s
@@ -44,50 +45,55 @@ impl TendonWorkspace {
         };
     }
 
-    /// Under a budget the warm joint path is the row's predictor and Newton from
-    /// the last converged row only: when they do not reach the row, the cold path
-    /// follows at once instead of the warm continuation in the readings (module
-    /// docs).
-    pub(super) fn budget_skips_continuation(&self) -> bool {
-        self.budget.limited && !self.joint.cold
+    /// Under a budget the warm joint path (`cold` false) is the row's predictor and
+    /// Newton from the last converged row only: when they do not reach the row, the
+    /// cold path follows at once instead of the warm continuation in the readings
+    /// (module docs).
+    pub(super) fn skips_continuation(&self, cold: bool) -> bool {
+        self.limited && !cold
     }
 
-    /// The warm joint path handed back within the budget: the cold path from the
-    /// reference gets the rest (module docs). Sets the tensions to the pretensions.
-    pub(super) fn budget_second_chance(&mut self) {
-        for i in 0..self.driven.len() {
-            self.t[i] = self.mech[i].pretension_n;
-        }
-        self.joint.cold = true;
-    }
-
-    /// May this call run one more rod evaluation? `false` once its budget
-    /// ([`TendonSettings::max_passes`], `time_budget_s`) is spent; the call then
-    /// ends with [`SolveStatus::BudgetExhausted`] (`finish`). No allocation.
+    /// May this call, with `passes` rod evaluations run, run one more? `false` once
+    /// its budget ([`TendonSettings::max_passes`], `time_budget_s`) is spent; the
+    /// call then ends with [`SolveStatus::BudgetExhausted`] (`Status::conclude`).
+    /// No allocation.
     ///
     /// [`TendonSettings::max_passes`]: crate::settings::TendonSettings::max_passes
     /// [`SolveStatus::BudgetExhausted`]: crate::statics::SolveStatus::BudgetExhausted
-    pub(super) fn within_budget(&mut self) -> bool {
-        if self.budget.spent {
+    pub(super) fn allows(&mut self, settings: &TendonSettings, passes: usize) -> bool {
+        if self.spent {
             return false;
         }
-        let passes = self.report.forward_solves;
-        let spent = self
-            .tendon_settings()
-            .max_passes
-            .is_some_and(|m| passes >= m)
-            || self.budget.deadline.is_some_and(|d| Instant::now() >= d);
-        self.budget.spent = spent;
+        let spent = settings.max_passes.is_some_and(|m| passes >= m)
+            || self.deadline.is_some_and(|d| Instant::now() >= d);
+        self.spent = spent;
         !spent
     }
 
     /// After the joint paths did not converge: does the budget end the call here?
     /// It does whenever a budget is set: a budgeted call does not run the nested
     /// fallback (module docs). The call then ends with `BudgetExhausted`.
-    pub(super) fn budget_ends_call(&mut self) -> bool {
-        if self.budget.limited {
-            self.budget.spent = true;
+    pub(super) fn ends_call(&mut self) -> bool {
+        if self.limited {
+            self.spent = true;
         }
-        self.budget.spent
+        self.spent
+    }
+}
+
+impl TendonWorkspace {
+    /// The warm joint path handed back within the budget: the cold path from the
+    /// reference gets the rest (module docs). Sets the tensions to the pretensions.
+    pub(super) fn budget_second_chance(&mut self) {
+        for (t, m) in self.iter.t.iter_mut().zip(&self.tendons.mech) {
+            *t = m.pretension_n;
+        }
+        self.joint.cold = true;
+    }
+
+    /// [`Budget::allows`] one more rod evaluation of this call.
+    pub(super) fn within_budget(&mut self) -> bool {
+        let passes = self.status.report.forward_solves;
+        self.budget.allows(&self.ws.settings().tendons, passes)
     }
 }

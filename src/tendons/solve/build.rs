@@ -2,10 +2,10 @@
 //! arms from the robot, and the reference solve at the pretensions that fixes each
 //! tendon's free length `L0`.
 
-use super::{budget, joint, Rollback, TendonReport, TendonWorkspace};
+use super::{budget, friction, joint, nested, Rollback};
+use super::{Iterate, Status, TendonReport, TendonWorkspace, Tendons};
 use crate::error::ModelError;
 use crate::loads::Loads;
-use crate::math::DenseLu;
 use crate::robot::Robot;
 use crate::settings::SolverSettings;
 use crate::statics::{ParamSite, SolveStatus, Start, Workspace};
@@ -88,47 +88,37 @@ impl TendonWorkspace {
         params.extend_from_slice(extra);
         let nc = robot.cables().len();
         let routes: Vec<usize> = robot.cables().iter().map(|c| c.route.len()).collect();
-        let friction = robot.friction();
+        let friction = friction::Friction::new(robot.friction(), driven.iter().map(|&j| routes[j]));
         let ws = Workspace::with_params(robot, loads, settings, &params)?;
         let p = driven.len();
         let np = params.len();
-        let joint = joint::JointBufs::new(ws.unknowns(), p, np, nc);
         let mut me = Self {
-            joint,
+            joint: joint::JointBufs::new(ws.unknowns(), p, np, nc),
             ws,
-            columns,
-            free0: vec![0.0; p],
-            free: vec![0.0; p],
-            geo,
-            t: mech.iter().map(|m| m.pretension_n).collect(),
-            t_trial: vec![0.0; p],
-            taut: vec![true; p],
-            taut_before: vec![true; p],
-            g: vec![0.0; p],
-            step: vec![0.0; p],
-            theta: vec![0.0; np],
-            n_extra: extra.len(),
-            sens: vec![0.0; nc * np],
-            lengths: vec![0.0; nc],
-            lu: DenseLu::new(p),
-            sens_fresh: false,
-            friction,
-            sign: vec![0.0; p],
-            last_q: vec![0.0; p],
-            factors: driven.iter().map(|&j| vec![1.0; routes[j]]).collect(),
-            mean_factor: vec![1.0; p],
-            has_solution: false,
-            x_ref: Vec::new(),
-            report: TendonReport {
-                status: SolveStatus::NonFinite,
-                iterations: 0,
-                residual_m: f64::INFINITY,
-                forward_solves: 0,
-                shooting_solves: 0,
-                slack: 0,
+            iter: Iterate {
+                free: vec![0.0; p],
+                t: mech.iter().map(|m| m.pretension_n).collect(),
+                theta: vec![0.0; np],
+                lengths: vec![0.0; nc],
+                mean_factor: vec![1.0; p],
+                g: vec![0.0; p],
+                taut: vec![true; p],
             },
-            driven,
-            mech,
+            friction,
+            nested: nested::NestedBufs::new(p, np, nc),
+            status: Status {
+                report: TendonReport::unsolved(SolveStatus::NonFinite),
+                has_solution: false,
+            },
+            tendons: Tendons {
+                free0: vec![0.0; p],
+                n_extra: extra.len(),
+                x_ref: Vec::new(),
+                driven,
+                mech,
+                columns,
+                geo,
+            },
             rollback: Rollback {
                 enabled: true,
                 good: None,
@@ -144,10 +134,11 @@ impl TendonWorkspace {
 
     /// Solve at the pretensions with zero readings and set `L0`.
     fn reference(&mut self) -> Result<(), ModelError> {
-        for (i, m) in self.mech.iter().enumerate() {
-            self.theta[i] = m.pretension_n;
+        let (tendons, iter) = (&mut self.tendons, &mut self.iter);
+        for (i, m) in tendons.mech.iter().enumerate() {
+            iter.theta[i] = m.pretension_n;
         }
-        self.ws.set_theta(&self.theta);
+        self.ws.set_theta(&iter.theta);
         let rep = self.ws.solve(Start::Cold);
         if !rep.status.is_converged() {
             // the reference is the whole scene at q = 0: the pretensions are one of
@@ -162,23 +153,23 @@ impl TendonWorkspace {
         }
         // every cable's path: the chords through its holes (thesis 3.8.1) or a
         // continuous tendon's integral along the pass (`statics::pass::continuous`)
-        self.ws.cable_lengths_into(&mut self.lengths);
-        for (i, &j) in self.driven.iter().enumerate() {
-            let l = self.lengths[j];
-            self.free0[i] = self.mech[i].free_length_at_rest(l);
-            if self.free0[i].is_nan() || self.free0[i] <= 0.0 {
+        self.ws.cable_lengths_into(&mut iter.lengths);
+        for (i, &j) in tendons.driven.iter().enumerate() {
+            let l = iter.lengths[j];
+            tendons.free0[i] = tendons.mech[i].free_length_at_rest(l);
+            if tendons.free0[i].is_nan() || tendons.free0[i] <= 0.0 {
                 return Err(ModelError::OutOfRange {
                     field: format!("robot.cables[{j}].tendon"),
-                    value: self.free0[i],
+                    value: tendons.free0[i],
                     why: "the pretension and series spring leave no free length".into(),
                 });
             }
         }
         // the reference is the point of zero readings
-        self.free.copy_from_slice(&self.free0);
-        self.x_ref.clear();
-        self.x_ref.extend_from_slice(self.ws.unknowns_vector());
-        self.has_solution = true;
+        iter.free.copy_from_slice(&tendons.free0);
+        tendons.x_ref.clear();
+        tendons.x_ref.extend_from_slice(self.ws.unknowns_vector());
+        self.status.has_solution = true;
         Ok(())
     }
 }

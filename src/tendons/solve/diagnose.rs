@@ -3,8 +3,9 @@
 //! tension the solve reached, instead of `loads.tensions_n[j]` (which a
 //! displacement-driven tendon does not read).
 
-use super::TendonWorkspace;
+use super::{TendonWorkspace, Tendons};
 use crate::error::Num;
+use crate::robot::Robot;
 use crate::statics::{diagnose_named, Diagnosis, LoadShare};
 
 impl TendonWorkspace {
@@ -13,14 +14,15 @@ impl TendonWorkspace {
     /// (`Workspace::diagnose`; a tendon is named by its readings column). Meant for
     /// a row that did not converge; allocates.
     pub fn diagnose(&self) -> Diagnosis {
-        let column = |i: usize| format!("readings column {}", self.columns[i]);
+        let (tendons, free) = (&self.tendons, &self.iter.free);
+        let column = |i: usize| format!("readings column {}", tendons.columns[i]);
         let names = |j: usize| {
-            let i = self.driven.iter().position(|&c| c == j)?;
-            let t = Num((self.t[i] * 1e3).round() / 1e3);
+            let i = tendons.driven.iter().position(|&c| c == j)?;
+            let t = Num((self.iter.t[i] * 1e3).round() / 1e3);
             Some((column(i), format!("tension reached {t} N")))
         };
         let ws = &self.ws;
-        let r = &self.report;
+        let r = &self.status.report;
         let outcome = (r.status, r.residual_m, self.tendon_settings().tolerance_m);
         let mut d = diagnose_named(
             ws.robot(),
@@ -32,8 +34,8 @@ impl TendonWorkspace {
         );
         // the bend each pull asks of the rod by constant-curvature kinematics (path
         // change = hole radius x bending angle: the CC rung's displacement control)
-        for (i, &j) in self.driven.iter().enumerate() {
-            let pull = self.pull(i);
+        for (i, &j) in tendons.driven.iter().enumerate() {
+            let pull = tendons.pull(free, i);
             let radius = ws.robot().cables()[j]
                 .hole_local
                 .last()
@@ -48,13 +50,16 @@ impl TendonWorkspace {
             }
         }
         d.pulls.sort_by(|a, b| b.intensity.total_cmp(&a.intensity));
-        d.compression = self.compression();
+        d.compression = tendons.compression(ws.robot(), free);
         d
     }
+}
 
-    /// How far driven tendon `i` is pulled in from reading 0 (m; `L0 - L_f`).
-    fn pull(&self, i: usize) -> f64 {
-        self.free0[i] - self.free[i]
+impl Tendons {
+    /// How far driven tendon `i` is pulled in from reading 0 (m; `L0 - L_f`) at the
+    /// free lengths `free`.
+    fn pull(&self, free: &[f64], i: usize) -> f64 {
+        self.free0[i] - free[i]
     }
 
     /// The largest axial load the pulls ask of the backbone, as a share of the Euler
@@ -70,8 +75,7 @@ impl TendonWorkspace {
     /// load `pi^2 EI / h^2` of the rod between the two farthest-apart disks of
     /// sections `0..=k` (pinned ends: the disks hold the rod's position, not its
     /// slope).
-    fn compression(&self) -> Option<LoadShare> {
-        let robot = self.ws.robot();
+    fn compression(&self, robot: &Robot, free: &[f64]) -> Option<LoadShare> {
         let cables = robot.cables();
         let sections = robot.sections();
         let mut best: Option<LoadShare> = None;
@@ -83,13 +87,13 @@ impl TendonWorkspace {
                 continue;
             }
             let n = group.len() as f64;
-            let q = group.iter().map(|&i| self.pull(i)).sum::<f64>() / n;
+            let q = group.iter().map(|&i| self.pull(free, i)).sum::<f64>() / n;
             if q <= 0.0 {
                 continue;
             }
             let c = group
                 .iter()
-                .map(|&i| self.mech[i].compliance(self.free[i], 1.0))
+                .map(|&i| self.mech[i].compliance(free[i], 1.0))
                 .sum::<f64>()
                 / n;
             let length = cables[self.driven[group[0]]].end_s;

@@ -29,7 +29,7 @@
 
 use super::TendonWorkspace;
 use crate::math::DenseLu;
-use crate::settings::CableCoupling;
+use crate::settings::{CableCoupling, SolverSettings};
 use crate::statics::{SolveStatus, LOCAL_TOL};
 
 // The row's start: the previous row's residual without a pass, and a predictor.
@@ -71,7 +71,7 @@ pub(super) struct ChordPolicy {
     skip_after_failure: bool,
     /// Trials of a chord step: the full step, then after each evaluated failure the
     /// full step of the inverse Broyden-updated from that trial
-    /// (`TendonWorkspace::joint_chord_retry`); a trial whose pass
+    /// (`JointBufs::chord_retry`); a trial whose pass
     /// failed is halved instead, and a halved step is accepted on Armijo's decrease
     /// (`1 - 1e-4 alpha`).
     trials: usize,
@@ -113,7 +113,7 @@ impl ChordPolicy {
     };
     /// The arc coupling: an explicit pass is cheap (120 RHS and the disks' rounds)
     /// and a `Dual<15>` sweep is worth ~12 of them, so a chord step is retried
-    /// before it gives way (updated by `joint_chord_retry`, not halved), and
+    /// before it gives way (updated by `JointBufs::chord_retry`, not halved), and
     /// every row tries it first. On the 443 FTDCR v4 val rows warm
     /// (`examples/tendon_profile`, `COUPLING=arc`), `f64` / dual RHS a row and
     /// callgrind instructions: the condensed policy 950 / 97.2, 1.322e9; this
@@ -202,7 +202,7 @@ pub(super) struct JointBufs {
     pub(super) free_prev: Vec<f64>,
     free_row: Vec<f64>,
     /// `|| [r; w G] ||_2 / tol` at the last evaluation (line-search merit; `w` from
-    /// [`MERIT_G_UNIT_M`], `TendonWorkspace::joint_norms`).
+    /// [`MERIT_G_UNIT_M`], `JointBufs::norms`).
     l2: f64,
     /// Settle tolerance of the inner passes now in effect (fraction of the length).
     inner_tol: f64,
@@ -221,7 +221,7 @@ pub(super) struct JointBufs {
     /// `l2` merit at the last predicted point over the merit at its row's start
     /// (what the next prediction expects: its settle tolerance).
     pred_ratio: f64,
-    /// Active-set switch of a fresh step (`joint_switch_step`): the iterate's
+    /// Active-set switch of a fresh step (`JointBufs::switch_step`): the iterate's
     /// branch values, and the step's own active set, step and residual.
     gap0: Vec<f64>,
     arm0: Vec<f64>,
@@ -321,14 +321,14 @@ impl TendonWorkspace {
     /// continuation step fails too.
     pub(super) fn solve_joint(&mut self) -> bool {
         self.joint.x0.copy_from_slice(self.ws.unknowns_vector());
-        self.joint.t0.copy_from_slice(&self.t);
+        self.joint.t0.copy_from_slice(&self.iter.t);
         self.joint.x.copy_from_slice(&self.joint.x0);
         self.joint.predicted = false;
         let mut first = None;
         match self.joint_predict() {
             RowStart::Converged => {
-                self.report.status = SolveStatus::Converged;
-                self.report.iterations = 0;
+                self.status.set(SolveStatus::Converged);
+                self.status.report.iterations = 0;
                 return true;
             }
             RowStart::Evaluated(m) => match self.joint_newton(1.0, Some(m)) {
@@ -337,7 +337,7 @@ impl TendonWorkspace {
                 Err(_) => {
                     // the predicted start did not converge: the row's plain start
                     self.joint_inner_tolerance(0.0);
-                    self.t.copy_from_slice(&self.joint.t0);
+                    self.iter.t.copy_from_slice(&self.joint.t0);
                     self.joint.x.copy_from_slice(&self.joint.x0);
                 }
             },
@@ -350,19 +350,19 @@ impl TendonWorkspace {
                 Err(first) => first,
             },
         };
-        if self.budget_skips_continuation() {
+        if self.budget.skips_continuation(self.joint.cold) {
             return self.joint_hand_back();
         }
         // continuation, when the first fresh step says how far the row is (from the
         // free lengths of the starting point: the previous row's); failing that, a
         // second one with a larger step limit; then the nested method
-        self.joint.free_row.copy_from_slice(&self.free);
+        self.joint.free_row.copy_from_slice(&self.iter.free);
         self.joint_continuation(first) || self.joint_retry(first)
     }
 
     /// Settle tolerance of the next passes from the residual of the current iterate
     /// (0: fully settled, `LOCAL_TOL`): `1e-7` of its residual `residual`
-    /// (`max(|r|, w |G|)`, [`Self::joint_norms`]) as a fraction of the
+    /// (`max(|r|, w |G|)`, [`JointBufs::norms`]) as a fraction of the
     /// rod length (the boundary residual moves by ~100-1000 times a
     /// scaled hole error, so the inner error stays 1e-5..1e-4 of the outer residual;
     /// near convergence the clamp makes it `LOCAL_TOL`). Measured on the 443 FTDCR v4
@@ -374,47 +374,30 @@ impl TendonWorkspace {
         self.joint.inner_tol = self.ws.set_local_tolerance(1e-7 * residual);
     }
 
-    /// `(l2, settle)` of the residual `[r; G]` in `f_now`: the line-search merit
-    /// (`JointBufs::l2`) and the largest component of `[r; w G]` (what the next
-    /// passes' settle tolerance follows). `G`
-    /// is weighed against the settings' shooting tolerance, not this solve's `tol`
-    /// (which the residual floor may raise), as the tolerances' ratio did.
-    fn joint_norms(&self, tol: f64) -> (f64, f64) {
-        let n = self.joint.x.len();
-        let (r, g) = self.joint.f_now.split_at(n);
-        let w = tol / (MERIT_G_UNIT_M * self.ws.settings().tolerance);
-        let (mut sum, mut top) = (0.0, 0.0f64);
-        for v in r.iter().copied().chain(g.iter().map(|g| g * w)) {
-            sum += v * v;
-            top = top.max(v.abs());
-        }
-        (sum.sqrt() / tol, top)
-    }
-
     /// Shooting residual, lengths and `G` at `(joint.x, t)`; the merit
     /// `max(|r|/tol, |G|/tol_G)` (converged at <= 1), `None` if the pass failed.
     fn joint_evaluate(&mut self) -> Option<f64> {
         if !self.within_budget() {
             return None;
         }
-        self.ref_leave();
-        let p = self.driven.len();
-        self.theta[..p].copy_from_slice(&self.t);
-        self.ws.set_theta(&self.theta);
-        self.report.forward_solves += 1;
+        self.joint.rj.leave();
+        let p = self.tendons.driven.len();
+        self.iter.theta[..p].copy_from_slice(&self.iter.t);
+        self.ws.set_theta(&self.iter.theta);
+        self.status.report.forward_solves += 1;
         let res = self.ws.adopt_unknowns(&self.joint.x, true);
         if !res.is_finite() {
             return None;
         }
-        self.ws.cable_lengths_into(&mut self.lengths);
-        self.update_g();
+        self.ws.cable_lengths_into(&mut self.iter.lengths);
+        self.iter.update_g(&self.tendons);
         let tol = self.ws.report().tolerance;
         let tol_g = self.tendon_settings().tolerance_m;
         let n = self.joint.x.len();
         self.joint.f_now[..n].copy_from_slice(self.ws.residual_vector());
-        self.joint.f_now[n..].copy_from_slice(&self.g);
-        self.joint.l2 = self.joint_norms(tol).0;
-        Some((res / tol).max(self.merit() / tol_g))
+        self.joint.f_now[n..].copy_from_slice(&self.iter.g);
+        self.joint.l2 = self.joint.norms(tol, self.ws.settings()).0;
+        Some((res / tol).max(self.iter.merit() / tol_g))
     }
 
     /// Restore the row's starting point for the nested method; `false`.
@@ -425,14 +408,33 @@ impl TendonWorkspace {
             return false;
         }
         self.joint_inner_tolerance(0.0);
-        self.t.copy_from_slice(&self.joint.t0);
+        self.iter.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);
         self.joint.lu_valid = false;
         if self.joint_evaluate().is_none() {
             // the start was a converged row: only a non-finite theta could fail it
-            self.has_solution = false;
+            self.status.has_solution = false;
         }
         false
+    }
+}
+
+impl JointBufs {
+    /// `(l2, settle)` of the residual `[r; G]` in `f_now`: the line-search merit
+    /// (`l2`) and the largest component of `[r; w G]` (what the next
+    /// passes' settle tolerance follows). `G`
+    /// is weighed against the settings' shooting tolerance, not this solve's `tol`
+    /// (which the residual floor may raise), as the tolerances' ratio did.
+    pub(super) fn norms(&self, tol: f64, settings: &SolverSettings) -> (f64, f64) {
+        let n = self.x.len();
+        let (r, g) = self.f_now.split_at(n);
+        let w = tol / (MERIT_G_UNIT_M * settings.tolerance);
+        let (mut sum, mut top) = (0.0, 0.0f64);
+        for v in r.iter().copied().chain(g.iter().map(|g| g * w)) {
+            sum += v * v;
+            top = top.max(v.abs());
+        }
+        (sum.sqrt() / tol, top)
     }
 }
 

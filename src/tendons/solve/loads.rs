@@ -30,7 +30,7 @@ use crate::robot::Actuation;
 impl TendonWorkspace {
     /// Number of extra load parameters (after the tensions).
     pub fn extra_count(&self) -> usize {
-        self.n_extra
+        self.tendons.n_extra
     }
 
     /// Replace the scene's external loads (gravity, point loads and payloads, and
@@ -72,7 +72,7 @@ impl TendonWorkspace {
         // the extrapolation history, the cached lengths and sensitivities belong to
         // the old loads
         self.joint.forget_history();
-        self.sens_fresh = false;
+        self.nested.sens_fresh = false;
         if self.rollback.enabled {
             // the kept state must have the new loads' structure (warm copies need it)
             self.rollback.good = None;
@@ -84,14 +84,14 @@ impl TendonWorkspace {
     /// The readings (m) that mean `q = 0` for every driven tendon (each tendon's
     /// encoder zero offset): the reference state that fixed `L0`.
     pub fn zero_readings(&self) -> Vec<f64> {
-        self.mech.iter().map(|m| m.zero_offset_m).collect()
+        self.tendons.mech.iter().map(|m| m.zero_offset_m).collect()
     }
 
     /// Check a row of readings without solving: one per driven tendon, finite,
     /// leaving a positive free length (the errors of
     /// [`TendonWorkspace::solve_readings`]).
     pub fn validate_readings(&self, readings_m: &[f64]) -> Result<(), ModelError> {
-        self.check_readings(readings_m)
+        self.tendons.check_readings(readings_m)
     }
 
     /// At the last converged solve: the total sensitivities of every cable's path
@@ -102,41 +102,42 @@ impl TendonWorkspace {
     /// `driven x driven` generalized Jacobian; no allocation. `false` when the sweep
     /// fails or the Jacobian is singular.
     pub fn load_sensitivities(&mut self, dl: &mut [f64], dt: &mut [f64]) -> bool {
-        let p = self.driven.len();
-        let e = self.n_extra;
-        let np = self.theta.len();
-        let nc = self.lengths.len();
+        let (tendons, iter, nb) = (&self.tendons, &mut self.iter, &mut self.nested);
+        let p = tendons.driven.len();
+        let e = tendons.n_extra;
+        let np = iter.theta.len();
+        let nc = iter.lengths.len();
         // (the sweep rewrites `lengths`: the next row evaluates its start)
         self.joint.at_solution = false;
         if !self
             .ws
-            .length_sensitivities(&mut self.sens, &mut self.lengths)
+            .length_sensitivities(&mut nb.sens, &mut iter.lengths)
         {
             return false;
         }
-        self.sens_fresh = true;
+        nb.sens_fresh = true;
         // the generalized Jacobian of the Newton step at this point (same rows)
-        if !self.factor_tension_jacobian() {
+        if !nb.factor_tension_jacobian(tendons, iter) {
             return false;
         }
         for k in 0..e {
             // right-hand side B e_k into the step scratch, then dT/dphi_k
             for i in 0..p {
-                let j = self.driven[i];
-                self.step[i] = if self.taut[i] {
-                    self.sens[j * np + p + k]
+                let j = tendons.driven[i];
+                nb.step[i] = if iter.taut[i] {
+                    nb.sens[j * np + p + k]
                 } else {
                     0.0
                 };
             }
-            self.lu.solve_in_place(&mut self.step);
+            nb.lu.solve_in_place(&mut nb.step);
             for i in 0..p {
-                dt[i * e + k] = if self.taut[i] { self.step[i] } else { 0.0 };
+                dt[i * e + k] = if iter.taut[i] { nb.step[i] } else { 0.0 };
             }
             for jc in 0..nc {
-                let mut v = self.sens[jc * np + p + k];
+                let mut v = nb.sens[jc * np + p + k];
                 for i in 0..p {
-                    v += self.sens[jc * np + i] * dt[i * e + k];
+                    v += nb.sens[jc * np + i] * dt[i * e + k];
                 }
                 dl[jc * e + k] = v;
             }

@@ -24,88 +24,82 @@
 //! train rows warm, 2 223 -> 2 012 and 105.9 -> 87.6. Every tip within 1.9e-11 m of
 //! the old one, every taut flag equal; 5 000 ticks of the 1 kHz loop bit-identical.
 
-use super::super::TendonWorkspace;
+use super::super::{Iterate, Tendons};
+use super::JointBufs;
 
 /// Most active-set rounds on one linearisation (the method can cycle when the
 /// Jacobian is not an M-matrix; the step's own set is kept then).
 const ROUNDS: usize = 8;
 
-impl TendonWorkspace {
-    /// Replace the fresh step `joint.dz` (active set `joint.lu_taut`, from
-    /// `joint_step`) by the step whose active set solves the linearised
-    /// complementarity problem (module docs); unchanged when none is found.
-    /// Needs the iterate's branches (`joint_save_branches`) and `joint.ts` = `t`.
-    pub(super) fn joint_linear_active_set(&mut self, n: usize, p: usize) {
-        let w = n + self.theta.len();
+impl JointBufs {
+    /// Replace the fresh step `dz` (active set `lu_taut`, from `newton_step`) by
+    /// the step whose active set solves the linearised complementarity problem
+    /// (module docs); unchanged when none is found. Needs the iterate's branches
+    /// (`save_branches`) and `ts` = the tensions of `it`.
+    pub(super) fn linear_active_set(&mut self, td: &Tendons, it: &Iterate) {
+        let (n, p) = (self.x.len(), td.driven.len());
+        let w = n + it.theta.len();
         let m = n + p;
-        {
-            let jb = &mut self.joint;
-            jb.sw_taut.copy_from_slice(&jb.lu_taut);
-            jb.sw_dz.copy_from_slice(&jb.dz);
-            jb.sw_f.copy_from_slice(&jb.f_prev);
-        }
+        self.sw_taut.copy_from_slice(&self.lu_taut);
+        self.sw_dz.copy_from_slice(&self.dz);
+        self.sw_f.copy_from_slice(&self.f_prev);
         for round in 0..=ROUNDS {
             // the tendons whose predicted branch disagrees with the assumed one
             let mut flipped = false;
-            for i in 0..p {
-                let jb = &self.joint;
-                let flip = if jb.lu_taut[i] {
-                    jb.ts[i] + jb.dz[n + i] < 0.0
+            for (i, &j) in td.driven.iter().enumerate() {
+                let flip = if self.lu_taut[i] {
+                    self.ts[i] + self.dz[n + i] < 0.0
                 } else {
-                    let j = self.driven[i];
-                    let c = self.mech[i].tangent_compliance(
-                        self.free[i],
-                        jb.ts[i],
-                        self.mean_factor[i],
-                    );
-                    let row = &jb.jac_m[j * w..j * w + m];
-                    let dl: f64 = row.iter().zip(&jb.dz).map(|(a, b)| a * b).sum();
-                    jb.gap0[i] + c * jb.dz[n + i] - dl < 0.0
+                    let c =
+                        td.mech[i].tangent_compliance(it.free[i], self.ts[i], it.mean_factor[i]);
+                    let row = &self.jac_m[j * w..j * w + m];
+                    let dl: f64 = row.iter().zip(&self.dz).map(|(a, b)| a * b).sum();
+                    self.gap0[i] + c * self.dz[n + i] - dl < 0.0
                 };
                 if flip {
-                    self.joint.lu_taut[i] = !self.joint.lu_taut[i];
+                    self.lu_taut[i] = !self.lu_taut[i];
                     flipped = true;
                 }
             }
             if !flipped {
                 return;
             }
-            if round == ROUNDS {
-                break;
-            }
-            if !self.joint_step_with_set(n, p) {
+            if round == ROUNDS || !self.step_with_set(td, it) {
                 break;
             }
         }
         // no consistent set: the step's own
-        self.joint_unswitch();
+        self.unswitch(td, it);
     }
 
-    /// Newton's step from the iterate (`joint.xs`, `joint.ts`, its branches from
-    /// `joint_save_branches`) with the active set `joint.lu_taut` on the last sweep:
-    /// the tendon rows of the residual are each tendon's branch in that set (the
-    /// stretch gap when taut, the slack arm when slack); a slack tendon's step is
-    /// exactly `-T_i`. `false` when that Jacobian is singular.
-    pub(super) fn joint_step_with_set(&mut self, n: usize, p: usize) -> bool {
+    /// Newton's step from the iterate (`xs`, `ts`, its branches from
+    /// `save_branches`) with the active set `lu_taut` on the last sweep: the tendon
+    /// rows of the residual are each tendon's branch in that set (the stretch gap
+    /// when taut, the slack arm when slack); a slack tendon's step is exactly
+    /// `-T_i`. `false` when that Jacobian is singular.
+    fn step_with_set(&mut self, td: &Tendons, it: &Iterate) -> bool {
+        let (n, p) = (self.x.len(), td.driven.len());
         let m = n + p;
-        let jb = &mut self.joint;
         for i in 0..p {
-            jb.f_prev[n + i] = if jb.lu_taut[i] {
-                jb.gap0[i]
+            self.f_prev[n + i] = if self.lu_taut[i] {
+                self.gap0[i]
             } else {
-                jb.arm0[i]
+                self.arm0[i]
             };
         }
-        if !self.joint_assemble() {
+        if !self.assemble(td, it) {
             return false;
         }
-        let jb = &mut self.joint;
-        for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
-            *d = -row.iter().zip(&jb.f_prev).map(|(a, b)| a * b).sum::<f64>();
+        for (d, row) in self.dz.iter_mut().zip(self.h.chunks_exact(m)) {
+            *d = -row
+                .iter()
+                .zip(&self.f_prev)
+                .map(|(a, b)| a * b)
+                .sum::<f64>();
         }
         for i in 0..p {
-            if !jb.lu_taut[i] {
-                jb.dz[n + i] = -jb.ts[i];
+            if !self.lu_taut[i] {
+                self.dz[n + i] = -self.ts[i];
             }
         }
         true
@@ -114,51 +108,45 @@ impl TendonWorkspace {
     /// The iterate's two branches of each tendon's NCP function (the stretch gap
     /// `c_i T_i + L_f,i - l_i` and the slack arm `a_i T_i`), before a fresh step's
     /// trials overwrite the lengths.
-    pub(super) fn joint_save_branches(&mut self) {
-        for i in 0..self.driven.len() {
-            let j = self.driven[i];
-            let m = &self.mech[i];
-            let (f, mf) = (self.free[i], self.mean_factor[i]);
-            self.joint.gap0[i] = m.covered(f, self.t[i], mf) - self.lengths[j];
-            self.joint.arm0[i] = (m.compliance(f, mf) + self.geo[i]) * self.t[i];
+    pub(super) fn save_branches(&mut self, td: &Tendons, it: &Iterate) {
+        for (i, &j) in td.driven.iter().enumerate() {
+            let m = &td.mech[i];
+            let (f, mf) = (it.free[i], it.mean_factor[i]);
+            self.gap0[i] = m.covered(f, it.t[i], mf) - it.lengths[j];
+            self.arm0[i] = (m.compliance(f, mf) + td.geo[i]) * it.t[i];
         }
     }
 
-    /// After a fresh step whose full-length trial changed the active set (and was
-    /// not accepted): the semi-smooth Newton step from the iterate with the trial's
-    /// active set, from the same sweep (the generalized Jacobian's rows of the
-    /// switched tendons exchanged, no new sweep). `false` (the step's own set
-    /// restored) when that Jacobian is singular or the step too long. Why: on the
-    /// FTDCR v4 val rows where a tendon goes slack within a row, the projected step
-    /// (a taut tendon's tension clamped at 0) raised the merit 14-50x and the
-    /// backtracking then crept along at 0.5-0.97 of it per fresh sweep until the
-    /// row was handed back.
-    pub(super) fn joint_switch_step(&mut self, n: usize, p: usize) -> bool {
-        let jb = &mut self.joint;
-        jb.sw_taut.copy_from_slice(&jb.lu_taut);
-        jb.sw_dz.copy_from_slice(&jb.dz);
-        jb.sw_f.copy_from_slice(&jb.f_prev);
-        jb.lu_taut.copy_from_slice(&self.taut);
-        if !self.joint_step_with_set(n, p) {
-            self.joint_unswitch();
-            return false;
+    /// After a fresh step whose full-length trial changed the active set (to that
+    /// of `it`, and was not accepted): the semi-smooth Newton step from the iterate
+    /// with the trial's active set, from the same sweep (the generalized Jacobian's
+    /// rows of the switched tendons exchanged, no new sweep). `false` (the step's
+    /// own set restored) when that Jacobian is singular or the step too long. Why:
+    /// on the FTDCR v4 val rows where a tendon goes slack within a row, the
+    /// projected step (a taut tendon's tension clamped at 0) raised the merit
+    /// 14-50x and the backtracking then crept along at 0.5-0.97 of it per fresh
+    /// sweep until the row was handed back.
+    pub(super) fn switch_step(&mut self, td: &Tendons, it: &Iterate) -> bool {
+        self.sw_taut.copy_from_slice(&self.lu_taut);
+        self.sw_dz.copy_from_slice(&self.dz);
+        self.sw_f.copy_from_slice(&self.f_prev);
+        self.lu_taut.copy_from_slice(&it.taut);
+        let ok = self.step_with_set(td, it) && {
+            let dx_max = self.step_max(self.x.len());
+            dx_max.is_finite() && dx_max <= self.max_step
+        };
+        if !ok {
+            self.unswitch(td, it);
         }
-        let jb = &mut self.joint;
-        let dx_max = jb.step_max(n);
-        if !dx_max.is_finite() || dx_max > jb.max_step {
-            self.joint_unswitch();
-            return false;
-        }
-        true
+        ok
     }
 
-    /// Undo [`Self::joint_switch_step`]: the step, residual and factorisation of the
+    /// Undo [`Self::switch_step`]: the step, residual and factorisation of the
     /// step's own active set.
-    pub(super) fn joint_unswitch(&mut self) {
-        let jb = &mut self.joint;
-        jb.lu_taut.copy_from_slice(&jb.sw_taut);
-        jb.dz.copy_from_slice(&jb.sw_dz);
-        jb.f_prev.copy_from_slice(&jb.sw_f);
-        self.joint_assemble();
+    pub(super) fn unswitch(&mut self, td: &Tendons, it: &Iterate) {
+        self.lu_taut.copy_from_slice(&self.sw_taut);
+        self.dz.copy_from_slice(&self.sw_dz);
+        self.f_prev.copy_from_slice(&self.sw_f);
+        self.assemble(td, it);
     }
 }

@@ -8,7 +8,7 @@
 //! case), this recovers the improved Jacobian `J = H^-1` (one `m x m`
 //! factorisation, `m = n + p` ~15), exchanges the switched tendons' rows (a slack
 //! row is exact; a taut row comes from the last sweep's partials: `tendon_row`, as
-//! in `joint_assemble`) and inverts again: two small factorisations instead of a
+//! in `JointBufs::assemble`) and inverts again: two small factorisations instead of a
 //! sweep (~9 `f64` passes on the FTDCR v4 scene). The chord step from it is tried
 //! like any other, and a fresh sweep follows when it fails.
 //!
@@ -32,42 +32,37 @@
 //! the exact sensitivities where the test allows 9.4e-6 (this way: 7.0e-7; before:
 //! 5.7e-7). Carrying at every iteration: 3.3e-6 there.
 
-use super::super::TendonWorkspace;
+use super::super::{Iterate, Tendons};
 use super::jacobian::{factor_and_invert, tendon_row};
+use super::JointBufs;
 
-impl TendonWorkspace {
-    /// Carry the reused inverse `H` (made for the active set `joint.lu_taut`) over
-    /// to the iterate's active set `taut` (module docs). `false` when a
-    /// factorisation is singular; then `joint.lu_valid` is false and a fresh sweep
-    /// follows.
-    pub(super) fn joint_carry_to_iterate(&mut self, n: usize, p: usize) -> bool {
+impl JointBufs {
+    /// Carry the reused inverse `H` (made for the active set `lu_taut`) over to the
+    /// iterate's active set (of `it`, module docs). `false` when a factorisation is
+    /// singular; then `lu_valid` is false and a fresh sweep follows.
+    pub(super) fn carry_to_iterate(&mut self, td: &Tendons, it: &Iterate) -> bool {
+        let (n, p) = (self.x.len(), td.driven.len());
         let m = n + p;
-        let w = n + self.theta.len();
-        let jb = &mut self.joint;
-        jb.lu.matrix_mut().copy_from_slice(&jb.h);
-        if !factor_and_invert(&mut jb.lu, &mut jb.jinv) {
-            jb.lu_valid = false;
+        let w = n + it.theta.len();
+        self.lu.matrix_mut().copy_from_slice(&self.h);
+        if !factor_and_invert(&mut self.lu, &mut self.jinv) {
+            self.lu_valid = false;
             return false;
         }
-        for i in 0..p {
-            if jb.lu_taut[i] == self.taut[i] {
+        for (i, &j) in td.driven.iter().enumerate() {
+            let taut = it.taut[i];
+            if self.lu_taut[i] == taut {
                 continue;
             }
-            let row = &mut jb.jinv[(n + i) * m..(n + i + 1) * m];
-            let j = self.driven[i];
-            let (mech, f, mf) = (&self.mech[i], self.free[i], self.mean_factor[i]);
-            let c = if self.taut[i] {
-                mech.tangent_compliance(f, self.t[i], mf)
-            } else {
-                mech.compliance(f, mf)
-            };
-            let sweep_row = &jb.jac_m[j * w..j * w + m];
-            tendon_row(row, n + i, self.taut[i], sweep_row, c, self.geo[i]);
+            let row = &mut self.jinv[(n + i) * m..(n + i + 1) * m];
+            let c = td.compliance(i, taut, it.free[i], it.t[i], it.mean_factor[i]);
+            let sweep_row = &self.jac_m[j * w..j * w + m];
+            tendon_row(row, n + i, taut, sweep_row, c, td.geo[i]);
         }
-        jb.lu_taut.copy_from_slice(&self.taut);
-        jb.lu.matrix_mut().copy_from_slice(&jb.jinv);
-        jb.lu_valid = factor_and_invert(&mut jb.lu, &mut jb.h);
-        jb.lu_valid
+        self.lu_taut.copy_from_slice(&it.taut);
+        self.lu.matrix_mut().copy_from_slice(&self.jinv);
+        self.lu_valid = factor_and_invert(&mut self.lu, &mut self.h);
+        self.lu_valid
     }
 }
 
@@ -108,15 +103,15 @@ mod tests {
     fn a_carried_inverse_is_the_inverse_of_the_exchanged_rows() {
         let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
         let mut tw = scene.tendon_workspace().expect("workspace");
-        let (n, p) = (tw.ws.unknowns(), tw.driven.len());
-        let (m, w) = (n + p, n + tw.theta.len());
+        let (n, p) = (tw.ws.unknowns(), tw.tendons.driven.len());
+        let (m, w) = (n + p, n + tw.iter.theta.len());
         let mut q = vec![0.0; p];
         q[0] = 0.002;
         q[3] = -0.004;
         assert!(tw.solve_readings(&q).expect("valid").status.is_converged());
         tw.joint.x.copy_from_slice(tw.ws.unknowns_vector());
         assert!(tw.joint_evaluate().is_some());
-        assert!(tw.joint_factor());
+        assert!(tw.joint.factor(&mut tw.ws, &tw.tendons, &tw.iter));
         let set0 = tw.joint.lu_taut.clone();
         let to_slack = set0.iter().position(|&t| t).expect("a taut tendon");
         let to_taut = set0.iter().position(|&t| !t).expect("a slack tendon");
@@ -124,17 +119,17 @@ mod tests {
         set1[to_slack] = false;
         set1[to_taut] = true;
         // from the sweep's inverse: carried against assembled
-        tw.taut.copy_from_slice(&set1);
-        assert!(tw.joint_carry_to_iterate(n, p));
+        tw.iter.taut.copy_from_slice(&set1);
+        assert!(tw.joint.carry_to_iterate(&tw.tendons, &tw.iter));
         let carried = tw.joint.h.clone();
         tw.joint.lu_taut.copy_from_slice(&set1);
-        assert!(tw.joint_assemble());
+        assert!(tw.joint.assemble(&tw.tendons, &tw.iter));
         let d = rel_diff(&carried, &tw.joint.h);
         assert!(d < 1e-9, "carried vs assembled: {d:e}");
         // after a Broyden update whose secant differs from the sweep's Jacobian
         // (as a nonlinear residual's does) on every row but the slack ones
         tw.joint.lu_taut.copy_from_slice(&set0);
-        assert!(tw.joint_assemble());
+        assert!(tw.joint.assemble(&tw.tendons, &tw.iter));
         let j0 = inverse(&tw.joint.h, m);
         let s: Vec<f64> = (0..m).map(|k| 0.01 * (k as f64 + 1.0).sin()).collect();
         let mut y: Vec<f64> = (0..m)
@@ -157,21 +152,22 @@ mod tests {
         );
         let updated = inverse(&tw.joint.h, m);
         assert!(rel_diff(&updated, &j0) > 1e-6, "the update changed nothing");
-        assert!(tw.joint_carry_to_iterate(n, p));
+        assert!(tw.joint.carry_to_iterate(&tw.tendons, &tw.iter));
         assert_eq!(tw.joint.lu_taut, set1);
         let j1 = inverse(&tw.joint.h, m);
         for r in 0..m {
             let row = &j1[r * m..(r + 1) * m];
             if r == n + to_slack {
                 let i = to_slack;
-                let a = tw.mech[i].compliance(tw.free[i], tw.mean_factor[i]) + tw.geo[i];
+                let a = tw.tendons.mech[i].compliance(tw.iter.free[i], tw.iter.mean_factor[i])
+                    + tw.tendons.geo[i];
                 for (k, v) in row.iter().enumerate() {
                     let want = if k == r { a } else { 0.0 };
                     assert!((v - want).abs() < 1e-9 * a, "slack row, column {k}: {v}");
                 }
             } else if r == n + to_taut {
-                let (i, j) = (to_taut, tw.driven[to_taut]);
-                let c = tw.mech[i].compliance(tw.free[i], tw.mean_factor[i]);
+                let (i, j) = (to_taut, tw.tendons.driven[to_taut]);
+                let c = tw.tendons.mech[i].compliance(tw.iter.free[i], tw.iter.mean_factor[i]);
                 let sweep: Vec<f64> = (0..m)
                     .map(|k| -tw.joint.jac_m[j * w + k] + if k == r { c } else { 0.0 })
                     .collect();

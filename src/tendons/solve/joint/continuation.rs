@@ -38,12 +38,12 @@ impl TendonWorkspace {
     /// free lengths `joint.free_prev`) to the row's (`joint.free_row`), with steps up
     /// to `joint.max_step`; `false` (with the row's free lengths back) when it failed.
     pub(super) fn joint_continuation(&mut self, first: f64) -> bool {
-        let p = self.driven.len();
+        let p = self.tendons.driven.len();
         let Some(k_steps) = joint_substeps(first, self.joint.max_step) else {
             return false;
         };
-        let mut iterations = self.report.iterations;
-        self.t.copy_from_slice(&self.joint.t0);
+        let mut iterations = self.status.report.iterations;
+        self.iter.t.copy_from_slice(&self.joint.t0);
         self.joint.x.copy_from_slice(&self.joint.x0);
         self.joint.x_ok.copy_from_slice(&self.joint.x0);
         self.joint.t_ok.copy_from_slice(&self.joint.t0);
@@ -62,27 +62,27 @@ impl TendonWorkspace {
             };
             for i in 0..p {
                 let (a, b) = (self.joint.free_prev[i], self.joint.free_row[i]);
-                self.free[i] = a + s * (b - a);
+                self.iter.free[i] = a + s * (b - a);
             }
             let tol = if s == 1.0 { 1.0 } else { SUBSTEP_MERIT };
             let out = self.joint_newton(tol, None);
-            iterations += self.report.iterations;
+            iterations += self.status.report.iterations;
             attempts += 1;
             if out.is_ok() {
                 done = s;
                 self.joint.x_ok.copy_from_slice(&self.joint.x);
-                self.joint.t_ok.copy_from_slice(&self.t);
+                self.joint.t_ok.copy_from_slice(&self.iter.t);
                 continue;
             }
             ds *= 0.5;
             if attempts >= MAX_SUBSTEP_ATTEMPTS || ds < MIN_SUBSTEP {
-                self.free.copy_from_slice(&self.joint.free_row);
+                self.iter.free.copy_from_slice(&self.joint.free_row);
                 return false;
             }
             self.joint.x.copy_from_slice(&self.joint.x_ok);
-            self.t.copy_from_slice(&self.joint.t_ok);
+            self.iter.t.copy_from_slice(&self.joint.t_ok);
         }
-        self.report.iterations = iterations;
+        self.status.report.iterations = iterations;
         true
     }
 

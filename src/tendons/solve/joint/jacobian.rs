@@ -3,101 +3,102 @@
 //! semi-smooth Newton step, and Broyden's update of the inverse after every accepted
 //! step.
 
-use super::super::TendonWorkspace;
+use super::super::{Iterate, Tendons};
+use super::JointBufs;
 use crate::math::broyden::{inverse_update, SkipTest, TailWeight};
 use crate::math::DenseLu;
+use crate::settings::SolverSettings;
+use crate::statics::Workspace;
 
-impl TendonWorkspace {
-    /// Exact generalized Jacobian at the current point, factorised.
-    pub(super) fn joint_factor(&mut self) -> bool {
-        let jb = &mut self.joint;
-        if !self.ws.joint_jacobians(&jb.x, &mut jb.jac_s, &mut jb.jac_m) {
-            jb.lu_valid = false;
+impl JointBufs {
+    /// Exact generalized Jacobian at the current point (`x`, the tensions of
+    /// `iter`), from a sweep of `ws`, factorised.
+    pub(super) fn factor(&mut self, ws: &mut Workspace, td: &Tendons, it: &Iterate) -> bool {
+        if !ws.joint_jacobians(&self.x, &mut self.jac_s, &mut self.jac_m) {
+            self.lu_valid = false;
             return false;
         }
-        jb.lu_taut.copy_from_slice(&self.taut);
-        self.joint_assemble()
+        self.lu_taut.copy_from_slice(&it.taut);
+        self.assemble(td, it)
     }
 
     /// Assemble and factorise the generalized Jacobian from the last sweep's
-    /// `jac_s`, `jac_m` with the active set `joint.lu_taut`.
-    pub(super) fn joint_assemble(&mut self) -> bool {
-        let n = self.ws.unknowns();
-        let p = self.driven.len();
-        let w = n + self.theta.len();
-        let jb = &mut self.joint;
+    /// `jac_s`, `jac_m` with the active set `lu_taut`.
+    pub(super) fn assemble(&mut self, td: &Tendons, it: &Iterate) -> bool {
+        let n = self.x.len();
+        let p = td.driven.len();
+        let w = n + it.theta.len();
         let m = n + p;
-        let a = jb.lu.matrix_mut();
+        let a = self.lu.matrix_mut();
         for r in 0..n {
-            a[r * m..r * m + n].copy_from_slice(&jb.jac_s[r * w..r * w + n]);
-            a[r * m + n..(r + 1) * m].copy_from_slice(&jb.jac_s[r * w + n..r * w + n + p]);
+            a[r * m..r * m + n].copy_from_slice(&self.jac_s[r * w..r * w + n]);
+            a[r * m + n..(r + 1) * m].copy_from_slice(&self.jac_s[r * w + n..r * w + n + p]);
         }
-        for i in 0..p {
+        for (i, &j) in td.driven.iter().enumerate() {
             let row = &mut a[(n + i) * m..(n + i + 1) * m];
-            let j = self.driven[i];
-            let (mech, f, mf) = (&self.mech[i], self.free[i], self.mean_factor[i]);
             // (the tangent at the iterate's tension, where the sweep was taken)
-            let c = if jb.lu_taut[i] {
-                mech.tangent_compliance(f, jb.ts[i], mf)
-            } else {
-                mech.compliance(f, mf)
-            };
-            let sweep_row = &jb.jac_m[j * w..j * w + m];
-            tendon_row(row, n + i, jb.lu_taut[i], sweep_row, c, self.geo[i]);
+            let c = td.compliance(
+                i,
+                self.lu_taut[i],
+                it.free[i],
+                self.ts[i],
+                it.mean_factor[i],
+            );
+            let sweep_row = &self.jac_m[j * w..j * w + m];
+            tendon_row(row, n + i, self.lu_taut[i], sweep_row, c, td.geo[i]);
         }
-        jb.lu_valid = factor_and_invert(&mut jb.lu, &mut jb.h);
-        jb.lu_valid
+        self.lu_valid = factor_and_invert(&mut self.lu, &mut self.h);
+        self.lu_valid
     }
 
     /// `dz = -J^-1 [r; G]` with the factorised Jacobian; a slack row's step is
-    /// exactly `-T_i` (see the nested method's `exact_slack_steps`).
-    pub(super) fn joint_step(&mut self, n: usize, p: usize) {
-        let jb = &mut self.joint;
-        let m = n + p;
-        jb.f_prev.copy_from_slice(&jb.f_now);
-        for (d, row) in jb.dz.iter_mut().zip(jb.h.chunks_exact(m)) {
-            *d = -row.iter().zip(&jb.f_now).map(|(a, b)| a * b).sum::<f64>();
+    /// exactly `-T_i` at the tensions `t` (see the nested method's
+    /// `exact_slack_steps`).
+    pub(super) fn newton_step(&mut self, n: usize, t: &[f64]) {
+        let m = n + t.len();
+        self.f_prev.copy_from_slice(&self.f_now);
+        for (d, row) in self.dz.iter_mut().zip(self.h.chunks_exact(m)) {
+            *d = -row.iter().zip(&self.f_now).map(|(a, b)| a * b).sum::<f64>();
         }
-        for i in 0..p {
-            if !jb.lu_taut[i] {
-                jb.dz[n + i] = -self.t[i];
+        for (i, t) in t.iter().enumerate() {
+            if !self.lu_taut[i] {
+                self.dz[n + i] = -t;
             }
         }
     }
 
     /// Broyden's ("good") update of the inverse Jacobian from the accepted step
-    /// `s = z_new - z_old` and the residual change `y = F_new - F_old`, in the inner
-    /// product that weighs a tension step by `q^2` ([`broyden_weight`]):
+    /// `s = z_new - z_old` (`z_new = [x; t]`) and the residual change
+    /// `y = F_new - F_old`, in the inner product that weighs a tension step by `q^2`
+    /// ([`broyden_weight`] of the `settings`' tolerances):
     /// `H <- H + (s - H y) s^T W H / (s^T W H y)` (Dennis & Schnabel, *Numerical
     /// Methods for Unconstrained Optimization*, eq. 8.3.1 in inverse form, the
     /// least change of `J` in the norm `W` weighs the unknowns by). Skipped when the
     /// denominator is tiny (the update would be ill-defined).
-    pub(super) fn joint_broyden(&mut self, n: usize, p: usize) {
-        let wt = broyden_weight(
-            self.ws.settings().tolerance,
-            self.tendon_settings().tolerance_m,
-        );
-        let jb = &mut self.joint;
+    pub(super) fn broyden(&mut self, n: usize, t: &[f64], settings: &SolverSettings) {
+        let wt = broyden_weight(settings.tolerance, settings.tendons.tolerance_m);
         for i in 0..n {
-            jb.step[i] = jb.x[i] - jb.xs[i];
+            self.step[i] = self.x[i] - self.xs[i];
         }
-        for i in 0..p {
-            jb.step[n + i] = self.t[i] - jb.ts[i];
+        for (i, t) in t.iter().enumerate() {
+            self.step[n + i] = t - self.ts[i];
         }
-        for (y, (a, b)) in jb.yv.iter_mut().zip(jb.f_now.iter().zip(&jb.f_prev)) {
+        for (y, (a, b)) in self.yv.iter_mut().zip(self.f_now.iter().zip(&self.f_prev)) {
             *y = a - b;
         }
+        let weight = TailWeight {
+            from: n,
+            weight: wt,
+        };
+        let (h, s, y) = (&mut self.h, &self.step, &self.yv);
         inverse_update(
-            &mut jb.h,
-            &jb.step,
-            &jb.yv,
-            TailWeight {
-                from: n,
-                weight: wt,
-            },
+            h,
+            s,
+            y,
+            weight,
             SkipTest::StepLength,
-            &mut jb.hy,
-            &mut jb.sth,
+            &mut self.hy,
+            &mut self.sth,
         );
     }
 }

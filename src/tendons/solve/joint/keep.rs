@@ -12,7 +12,9 @@
 //! ([`crate::statics::Workspace::settles_holes`]): its passes settle the next holes
 //! from the last pass, so the evaluation is repeated there as before.
 
-use super::super::TendonWorkspace;
+use super::super::Iterate;
+use super::JointBufs;
+use crate::statics::Workspace;
 
 /// The copy (sized once with the workspace).
 #[derive(Clone, Debug, Default)]
@@ -36,34 +38,35 @@ impl Kept {
     }
 }
 
-impl TendonWorkspace {
-    /// Keep the evaluation of the current iterate (`joint.x`, `t`, evaluated last).
-    pub(super) fn joint_keep(&mut self) {
-        let k = &mut self.joint.kept;
-        k.lengths.copy_from_slice(&self.lengths);
-        k.g.copy_from_slice(&self.g);
-        k.taut.copy_from_slice(&self.taut);
-        k.f.copy_from_slice(&self.joint.f_now);
-        k.l2 = self.joint.l2;
+impl JointBufs {
+    /// Keep the evaluation of the current iterate (`x`, the tensions of `it`,
+    /// evaluated last).
+    pub(super) fn keep(&mut self, it: &Iterate) {
+        let k = &mut self.kept;
+        k.lengths.copy_from_slice(&it.lengths);
+        k.g.copy_from_slice(&it.g);
+        k.taut.copy_from_slice(&it.taut);
+        k.f.copy_from_slice(&self.f_now);
+        k.l2 = self.l2;
     }
 
-    /// Restore the kept evaluation; the caller has put `joint.x` and `t` back to the
-    /// kept iterate's. `false` (nothing restored: evaluate it) when the workspace's
-    /// passes depend on the last pass.
-    pub(super) fn joint_restore(&mut self) -> bool {
-        if self.ws.settles_holes() {
+    /// Restore the kept evaluation into `it` (and `ws`'s tensions); the caller has
+    /// put `x` and the tensions back to the kept iterate's. `false` (nothing
+    /// restored: evaluate it) when the workspace's passes depend on the last pass.
+    pub(super) fn restore(&mut self, ws: &mut Workspace, it: &mut Iterate) -> bool {
+        if ws.settles_holes() {
             return false;
         }
-        let p = self.driven.len();
-        let k = &self.joint.kept;
-        self.lengths.copy_from_slice(&k.lengths);
-        self.g.copy_from_slice(&k.g);
-        self.taut.copy_from_slice(&k.taut);
-        self.joint.f_now.copy_from_slice(&k.f);
-        self.joint.l2 = k.l2;
+        let p = it.t.len();
+        let k = &self.kept;
+        it.lengths.copy_from_slice(&k.lengths);
+        it.g.copy_from_slice(&k.g);
+        it.taut.copy_from_slice(&k.taut);
+        self.f_now.copy_from_slice(&k.f);
+        self.l2 = k.l2;
         // the sweep reads the tensions from the inner workspace
-        self.theta[..p].copy_from_slice(&self.t);
-        self.ws.set_theta(&self.theta);
+        it.theta[..p].copy_from_slice(&it.t);
+        ws.set_theta(&it.theta);
         true
     }
 }
@@ -86,7 +89,7 @@ mod tests {
     fn a_restored_evaluation_is_the_evaluation() {
         let scene = Scene::load("data/scenes/ftdcr_v4.toml").expect("shipped scene");
         let mut tw = scene.tendon_workspace().expect("workspace");
-        let p = tw.driven.len();
+        let p = tw.tendons.driven.len();
         let mut q = vec![0.0; p];
         q[0] = 0.001;
         q[4] = -0.002;
@@ -96,33 +99,33 @@ mod tests {
         tw.solve_readings(&vec![0.0; p]).expect("valid");
         tw.solve_readings(&q).expect("valid");
         tw.joint.x.copy_from_slice(tw.ws.unknowns_vector());
-        let (x0, t0) = (tw.joint.x.clone(), tw.t.clone());
-        tw.free[2] += 1e-4;
+        let (x0, t0) = (tw.joint.x.clone(), tw.iter.t.clone());
+        tw.iter.free[2] += 1e-4;
         assert!(tw.joint_evaluate().is_some());
-        tw.joint_keep();
+        tw.joint.keep(&tw.iter);
         // a trial elsewhere, then back
         tw.joint.x[0] += 0.3;
-        tw.t.iter_mut().for_each(|t| *t *= 1.05);
+        tw.iter.t.iter_mut().for_each(|t| *t *= 1.05);
         assert!(tw.joint_evaluate().is_some());
         tw.joint.x.copy_from_slice(&x0);
-        tw.t.copy_from_slice(&t0);
-        assert!(tw.joint_restore());
+        tw.iter.t.copy_from_slice(&t0);
+        assert!(tw.joint.restore(&mut tw.ws, &mut tw.iter));
         let restored = (
-            tw.lengths.clone(),
-            tw.g.clone(),
-            tw.taut.clone(),
+            tw.iter.lengths.clone(),
+            tw.iter.g.clone(),
+            tw.iter.taut.clone(),
             tw.joint.f_now.clone(),
             tw.joint.l2,
         );
-        assert!(tw.joint_factor());
+        assert!(tw.joint.factor(&mut tw.ws, &tw.tendons, &tw.iter));
         let (jac_s, jac_m) = (tw.joint.jac_s.clone(), tw.joint.jac_m.clone());
         assert!(tw.joint_evaluate().is_some());
-        assert_eq!(restored.0, tw.lengths);
-        assert_eq!(restored.1, tw.g);
-        assert_eq!(restored.2, tw.taut);
+        assert_eq!(restored.0, tw.iter.lengths);
+        assert_eq!(restored.1, tw.iter.g);
+        assert_eq!(restored.2, tw.iter.taut);
         assert_eq!(restored.3, tw.joint.f_now);
         assert_eq!(restored.4, tw.joint.l2);
-        assert!(tw.joint_factor());
+        assert!(tw.joint.factor(&mut tw.ws, &tw.tendons, &tw.iter));
         assert_eq!(jac_s, tw.joint.jac_s);
         assert_eq!(jac_m, tw.joint.jac_m);
     }

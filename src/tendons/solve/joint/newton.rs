@@ -7,8 +7,10 @@
 //! on iterations, not fresh Jacobians; it shares the Armijo constant.
 
 use super::super::TendonWorkspace;
+use super::JointBufs;
 use super::{ChordPolicy, CHORD_PROBE, JOINT_MAX_ITERATIONS};
 use crate::math::newton::ARMIJO_SLOPE;
+use crate::settings::SolverSettings;
 use crate::statics::{SolveStatus, LOCAL_TOL};
 
 impl TendonWorkspace {
@@ -22,15 +24,15 @@ impl TendonWorkspace {
         evaluated: Option<f64>,
     ) -> Result<(), f64> {
         let n = self.ws.unknowns();
-        let p = self.driven.len();
+        let p = self.tendons.driven.len();
         let mut first_step = f64::INFINITY;
         let Some(mut merit) = evaluated.or_else(|| self.joint_evaluate()) else {
             return Err(first_step);
         };
-        self.ref_check();
+        self.joint.rj.check(&self.ws, &self.iter);
         let policy = ChordPolicy::of(self.ws.settings().cable_coupling, self.joint.cold);
         for it in 0..JOINT_MAX_ITERATIONS {
-            self.report.iterations = it;
+            self.status.report.iterations = it;
             if merit <= merit_tol {
                 if merit_tol <= 1.0 && self.joint.inner_tol > LOCAL_TOL {
                     // the point was evaluated with loosely settled next holes: confirm
@@ -44,14 +46,14 @@ impl TendonWorkspace {
                         continue;
                     }
                 }
-                if merit_tol <= 1.0 && self.zero_slack_tensions() {
+                if merit_tol <= 1.0 && self.iter.zero_slack_tensions() {
                     // a slack tendon carries exactly nothing (see the nested loop)
                     match self.joint_evaluate() {
                         Some(m) if m <= 1.0 => {}
                         _ => return Err(first_step),
                     }
                 }
-                self.report.status = SolveStatus::Converged;
+                self.status.set(SolveStatus::Converged);
                 return Ok(());
             }
             // a quasi-Newton step with the last Jacobian's inverse, Broyden-updated
@@ -62,8 +64,8 @@ impl TendonWorkspace {
             // set is carried over to the iterate's: `carry`)
             let carry = policy.carry && it == 0;
             let mut chord = self.joint.lu_valid
-                && (self.joint.lu_taut == self.taut
-                    || (carry && self.joint_carry_to_iterate(n, p)));
+                && (self.joint.lu_taut == self.iter.taut
+                    || (carry && self.joint.carry_to_iterate(&self.tendons, &self.iter)));
             // (a row started from an extrapolated point always tries the chord: on
             // the 443 FTDCR v4 val rows 2 026 -> 2 403 `f64` and 139.2 -> 117.6 dual
             // right-hand sides a row, 12.86 -> 12.76 M instructions; on 5 000 ticks
@@ -79,8 +81,8 @@ impl TendonWorkspace {
             }
             let l2_before = self.joint.l2;
             self.joint.xs.copy_from_slice(&self.joint.x);
-            self.joint.ts.copy_from_slice(&self.t);
-            self.joint_keep();
+            self.joint.ts.copy_from_slice(&self.iter.t);
+            self.joint.keep(&self.iter);
             let mut accepted = None;
             for fresh in [false, true] {
                 if !fresh && !chord {
@@ -93,19 +95,25 @@ impl TendonWorkspace {
                     // back from the failed chord trial to the iterate (its kept
                     // evaluation, `keep`)
                     self.joint.x.copy_from_slice(&self.joint.xs);
-                    self.t.copy_from_slice(&self.joint.ts);
-                    if !self.joint_restore() && self.joint_evaluate().is_none() {
+                    self.iter.t.copy_from_slice(&self.joint.ts);
+                    if !self.joint.restore(&mut self.ws, &mut self.iter)
+                        && self.joint_evaluate().is_none()
+                    {
                         return Err(first_step);
                     }
                 }
-                if fresh && !self.joint_fresh_jacobian() {
+                if fresh
+                    && !self
+                        .joint
+                        .fresh_jacobian(&mut self.ws, &self.tendons, &self.iter)
+                {
                     return Err(first_step);
                 }
-                self.joint_step(n, p);
+                self.joint.newton_step(n, &self.iter.t);
                 if fresh {
                     // the step's active set from its own linearisation (`active_set`)
-                    self.joint_save_branches();
-                    self.joint_linear_active_set(n, p);
+                    self.joint.save_branches(&self.tendons, &self.iter);
+                    self.joint.linear_active_set(&self.tendons, &self.iter);
                 }
                 let dx_max = self.joint.step_max(n);
                 if fresh && first_step.is_infinite() {
@@ -119,7 +127,10 @@ impl TendonWorkspace {
                 }
                 // inexact inner solves while far away (as the shooting Newton does):
                 // the trial's next holes settle to 1e-7 of the iterate's residual
-                let settle = self.joint_norms(self.ws.report().tolerance).1;
+                let settle = self
+                    .joint
+                    .norms(self.ws.report().tolerance, self.ws.settings())
+                    .1;
                 self.joint_inner_tolerance(settle);
                 // 0: the step's own active set, 1: trying the full step's, 2: tried
                 let mut switched = 0u8;
@@ -129,7 +140,7 @@ impl TendonWorkspace {
                         self.joint.x[i] = self.joint.xs[i] + alpha * self.joint.dz[i];
                     }
                     for i in 0..p {
-                        self.t[i] = (self.joint.ts[i] + alpha * self.joint.dz[n + i]).max(0.0);
+                        self.iter.t[i] = (self.joint.ts[i] + alpha * self.joint.dz[n + i]).max(0.0);
                     }
                     let mut evaluated = false;
                     if let Some(m) = self.joint_evaluate() {
@@ -147,28 +158,28 @@ impl TendonWorkspace {
                     if !fresh && evaluated {
                         // a failed chord trial is still a secant pair: Broyden's update
                         // from it, then the new quasi-Newton step from the iterate
-                        // (`joint_chord_retry`); a hopeless one gives way to a fresh
+                        // (`JointBufs::chord_retry`); a hopeless one gives way to a fresh
                         // Jacobian at once
                         if self.joint.l2 > policy.hopeless * l2_before
-                            || !self.joint_chord_retry(n, p)
+                            || !self.joint.chord_retry(&self.iter.t, self.ws.settings())
                         {
                             break;
                         }
                         continue;
                     }
-                    if fresh && switched == 0 && self.taut != self.joint.lu_taut {
+                    if fresh && switched == 0 && self.iter.taut != self.joint.lu_taut {
                         // the full step crossed a kink of G (a tendon went slack or
                         // taut): Newton's step from the iterate with the active set
-                        // found there, before any backtracking (`joint_switch_step`)
+                        // found there, before any backtracking (`JointBufs::switch_step`)
                         switched = 2;
-                        if self.joint_switch_step(n, p) {
+                        if self.joint.switch_step(&self.tendons, &self.iter) {
                             switched = 1;
                             continue;
                         }
                     } else if switched == 1 {
                         // it did not help: back to the step's own set, backtracking
                         switched = 2;
-                        self.joint_unswitch();
+                        self.joint.unswitch(&self.tendons, &self.iter);
                         alpha = 1.0;
                     }
                     alpha *= 0.5;
@@ -184,14 +195,16 @@ impl TendonWorkspace {
             match accepted {
                 Some(m) => {
                     merit = m;
-                    self.joint_broyden(n, p);
+                    self.joint.broyden(n, &self.iter.t, self.ws.settings());
                 }
                 None => return Err(first_step),
             }
         }
         Err(first_step)
     }
+}
 
+impl JointBufs {
     /// After a chord trial that failed (evaluated, not hopeless): Broyden's update
     /// from the trial's secant pair (the trial point against the iterate, whose
     /// residual is `f_prev`), then the step from the iterate with the updated
@@ -206,12 +219,12 @@ impl TendonWorkspace {
     /// 9.53; cold rows and 1 kHz ticks unchanged. A hopeless trial (merit up more than
     /// [`ChordPolicy::hopeless`]) still goes to a fresh Jacobian: updating from it too
     /// gave 7.33 on the val rows but 14.45 at the default tolerances.
-    pub(super) fn joint_chord_retry(&mut self, n: usize, p: usize) -> bool {
-        self.joint_broyden(n, p);
-        let jb = &mut self.joint;
-        jb.f_now.copy_from_slice(&jb.f_prev);
-        self.joint_step(n, p);
-        let dx_max = self.joint.step_max(n);
-        dx_max.is_finite() && dx_max <= self.joint.max_step
+    fn chord_retry(&mut self, t: &[f64], settings: &SolverSettings) -> bool {
+        let n = self.x.len();
+        self.broyden(n, t, settings);
+        self.f_now.copy_from_slice(&self.f_prev);
+        self.newton_step(n, t);
+        let dx_max = self.step_max(n);
+        dx_max.is_finite() && dx_max <= self.max_step
     }
 }

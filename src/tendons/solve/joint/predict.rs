@@ -120,31 +120,38 @@ impl TendonWorkspace {
     /// The row's start (module docs). Leaves `joint.x`, `t` at the start.
     pub(super) fn joint_predict(&mut self) -> RowStart {
         let n = self.ws.unknowns();
-        let p = self.driven.len();
+        let p = self.tendons.driven.len();
         let m = n + p;
         // `F_0` needs the workspace still at the last row's final evaluation
         let at_solution = std::mem::take(&mut self.joint.at_solution);
         if !at_solution
             || self.ws.unknowns_vector() != self.joint.x.as_slice()
-            || self.ws.theta() != self.theta.as_slice()
+            || self.ws.theta() != self.iter.theta.as_slice()
         {
             return RowStart::Plain;
         }
-        self.update_g();
+        self.iter.update_g(&self.tendons);
         let tol = self.ws.report().tolerance;
         let tol_g = self.tendon_settings().tolerance_m;
-        let g_max = self.merit();
-        self.joint.f_now[n..].copy_from_slice(&self.g);
-        let (l2_0, settle0) = self.joint_norms(tol);
+        let g_max = self.iter.merit();
+        self.joint.f_now[n..].copy_from_slice(&self.iter.g);
+        let (l2_0, settle0) = self.joint.norms(tol, self.ws.settings());
         let jb = &mut self.joint;
         jb.l2 = l2_0;
         let r_max = jb.f_now[..n].iter().fold(0.0f64, |a, r| a.max(r.abs()));
         let merit0 = (r_max / tol).max(g_max / tol_g);
-        if merit0 <= 1.0 && self.taut.iter().zip(&self.t).all(|(k, t)| *k || *t == 0.0) {
+        if merit0 <= 1.0
+            && self
+                .iter
+                .taut
+                .iter()
+                .zip(&self.iter.t)
+                .all(|(k, t)| *k || *t == 0.0)
+        {
             return RowStart::Converged;
         }
         let hist_ok = jb.hist_z[..n] == jb.x0[..] && jb.hist_z[n..m] == jb.t0[..];
-        let Some(w) = jb.extrapolation(&self.free).filter(|_| hist_ok) else {
+        let Some(w) = jb.extrapolation(&self.iter.free).filter(|_| hist_ok) else {
             return RowStart::Evaluated(merit0);
         };
         for k in 0..m {
@@ -152,13 +159,13 @@ impl TendonWorkspace {
         }
         // evaluate there (the step from z_1 is Broyden's secant pair when kept)
         jb.f_prev.copy_from_slice(&jb.f_now);
-        self.joint_keep();
+        self.joint.keep(&self.iter);
         let jb = &mut self.joint;
         jb.xs.copy_from_slice(&jb.x0);
         jb.ts.copy_from_slice(&jb.t0);
         jb.x.copy_from_slice(&jb.zp[..n]);
         for i in 0..p {
-            self.t[i] = jb.zp[n + i].max(0.0);
+            self.iter.t[i] = jb.zp[n + i].max(0.0);
         }
         // the next holes settle to 1e-7 of the residual the point is expected to
         // have: the start's times the last prediction's ratio (`joint.pred_ratio`)
@@ -168,7 +175,7 @@ impl TendonWorkspace {
         match ev {
             Some(mp) if self.joint.l2 < l2_0 => {
                 if self.joint.lu_valid {
-                    self.joint_broyden(n, p);
+                    self.joint.broyden(n, &self.iter.t, self.ws.settings());
                 }
                 self.joint.predicted = true;
                 RowStart::Evaluated(mp)
@@ -178,9 +185,9 @@ impl TendonWorkspace {
                 // first evaluation (a `merit0` within the tolerance still evaluates:
                 // the row would end at the restored point without a pass of its own)
                 self.joint_inner_tolerance(0.0);
-                self.t.copy_from_slice(&self.joint.t0);
+                self.iter.t.copy_from_slice(&self.joint.t0);
                 self.joint.x.copy_from_slice(&self.joint.x0);
-                if merit0 > 1.0 && self.joint_restore() {
+                if merit0 > 1.0 && self.joint.restore(&mut self.ws, &mut self.iter) {
                     return RowStart::Evaluated(merit0);
                 }
                 RowStart::Plain

@@ -4,7 +4,7 @@
 //! readings, the pretensions: `TendonWorkspace::reference`), so its first fresh
 //! Jacobian is always the same one: the sweep at `x_ref` with the tensions at the
 //! pretensions (only the tendon rows' compliance terms and the active set depend on
-//! the row, and `joint_assemble` adds those). The first cold solve keeps that sweep's
+//! the row, and `JointBufs::assemble` adds those). The first cold solve keeps that sweep's
 //! `d r / d[x; theta]` and `d l / d[x; theta]`; later cold solves assemble their
 //! first Jacobian from it instead of sweeping (one `Dual<21>` sweep, ~15 `f64`
 //! passes, of the ~4 a cold FTDCR v4 row takes).
@@ -17,7 +17,9 @@
 //! same load parameters: a changed model (calibrated parameters, other settings
 //! through `workspace_mut`) fails that and sweeps afresh (and keeps the new sweep).
 
-use super::super::TendonWorkspace;
+use super::super::{Iterate, Tendons};
+use super::JointBufs;
+use crate::statics::Workspace;
 
 /// Largest change of the scaled shooting residual at `x_ref`, in tolerances, for
 /// the kept Jacobian to count as the model's (settling the next holes from other
@@ -61,57 +63,61 @@ impl RefJacobian {
     }
 }
 
-impl TendonWorkspace {
-    /// After the first evaluation of a cold start (at `x_ref`): does the kept
-    /// Jacobian belong to this model?
-    pub(super) fn ref_check(&mut self) {
-        let rj = &mut self.joint.rj;
-        if !std::mem::take(&mut rj.pending) {
+impl RefJacobian {
+    /// After the first evaluation of a cold start (at `x_ref`, evaluated by `ws`
+    /// into `it`): does the kept Jacobian belong to this model?
+    pub(super) fn check(&mut self, ws: &Workspace, it: &Iterate) {
+        if !std::mem::take(&mut self.pending) {
             return;
         }
-        let tol = self.ws.report().tolerance;
+        let tol = ws.report().tolerance;
         let close = |a: &[f64], b: &[f64], eps: f64| {
             a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= eps)
         };
-        rj.at_ref = Some(
-            rj.valid
-                && rj.theta == self.theta
-                && close(&rj.res, self.ws.residual_vector(), RES_MATCH * tol)
-                && close(&rj.lengths, &self.lengths, LEN_MATCH),
+        self.at_ref = Some(
+            self.valid
+                && self.theta == it.theta
+                && close(&self.res, ws.residual_vector(), RES_MATCH * tol)
+                && close(&self.lengths, &it.lengths, LEN_MATCH),
         );
     }
 
+    /// Any evaluation (the iterate moved, or is evaluated again) ends what
+    /// [`Self::check`] found.
+    pub(super) fn leave(&mut self) {
+        self.at_ref = None;
+    }
+}
+
+impl JointBufs {
     /// The Jacobian of a fresh step: the kept one at the reference when it matches,
     /// else a sweep (kept when it is the reference's). `false` when it is singular or
     /// the sweep failed.
-    pub(super) fn joint_fresh_jacobian(&mut self) -> bool {
-        let at_ref = self.joint.rj.at_ref.take();
+    pub(super) fn fresh_jacobian(
+        &mut self,
+        ws: &mut Workspace,
+        td: &Tendons,
+        it: &Iterate,
+    ) -> bool {
+        let at_ref = self.rj.at_ref.take();
         if at_ref == Some(true) {
-            let jb = &mut self.joint;
-            jb.jac_s.copy_from_slice(&jb.rj.jac_s);
-            jb.jac_m.copy_from_slice(&jb.rj.jac_m);
-            jb.lu_taut.copy_from_slice(&self.taut);
-            return self.joint_assemble();
+            self.jac_s.copy_from_slice(&self.rj.jac_s);
+            self.jac_m.copy_from_slice(&self.rj.jac_m);
+            self.lu_taut.copy_from_slice(&it.taut);
+            return self.assemble(td, it);
         }
-        let ok = self.joint_factor();
+        let ok = self.factor(ws, td, it);
         if ok && at_ref == Some(false) {
-            let jb = &mut self.joint;
-            let rj = &mut jb.rj;
-            rj.jac_s.clone_from(&jb.jac_s);
-            rj.jac_m.clone_from(&jb.jac_m);
+            let rj = &mut self.rj;
+            rj.jac_s.clone_from(&self.jac_s);
+            rj.jac_m.clone_from(&self.jac_m);
             rj.res.clear();
-            rj.res.extend_from_slice(self.ws.residual_vector());
-            rj.lengths.clone_from(&self.lengths);
-            rj.theta.clone_from(&self.theta);
+            rj.res.extend_from_slice(ws.residual_vector());
+            rj.lengths.clone_from(&it.lengths);
+            rj.theta.clone_from(&it.theta);
             rj.valid = true;
         }
         ok
-    }
-
-    /// Any evaluation (the iterate moved, or is evaluated again) ends what
-    /// [`Self::ref_check`] found.
-    pub(super) fn ref_leave(&mut self) {
-        self.joint.rj.at_ref = None;
     }
 }
 
