@@ -16,13 +16,16 @@
 //! turning point along the path, not a step too long), with the tip's tilt, the
 //! taut tendons and the tensions at the last converged point; and
 //! three other paths (one section at a time, proximal first and distal first, and
-//! the pay-outs before the pulls). Timings depend on the machine's load; the counts
-//! do not.
+//! the pay-outs before the pulls). Last, the distal section's three tendons
+//! pulled together from reading 0 by steps of 0.1 mm: where that branch ends (the
+//! rod's buckling under its tendons' compression in the model). Timings depend on
+//! the machine's load; the counts do not.
 
 use cablesense::command::workspace::{halton, nearest_neighbour_order};
-use cablesense::statics::Start;
+use cablesense::statics::{SolveStatus, Start};
 use cablesense::tendons::TendonWorkspace;
 use cablesense::Scene;
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// Solve `q` from `start`; converged or not.
@@ -88,17 +91,59 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut failed = Vec::new();
     // converged, failed: samples, seconds, rod passes
     let mut acc = [(0usize, 0.0f64, 0usize); 2];
+    // failed samples by the first solve's status, and whether its last iterate
+    // had another set of taut tendons than the start
+    let mut by_status: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+    // classes of the probed failures (the warm path from the last converged sample)
+    let mut classes: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut probes = 0;
     solves(&mut ws, &vec![0.0; p]);
+    let mut from = vec![0.0; p];
     for k in nearest_neighbour_order(&unit, p, &zero) {
         let q = q_of(k);
+        let taut_before = ws.taut().to_vec();
         let t = Instant::now();
         let r = ws.solve_readings(&q)?;
         let i = usize::from(!r.status.is_converged());
         acc[i].0 += 1;
         acc[i].1 += t.elapsed().as_secs_f64();
         acc[i].2 += r.forward_solves;
-        if i == 1 {
-            failed.push(k);
+        if i == 0 {
+            from = q;
+            continue;
+        }
+        failed.push(k);
+        // a budgeted solve whose joint paths handed back with passes to spare ends
+        // `BudgetExhausted` (the nested fallback was all that was left): a stall
+        let status = match r.status {
+            SolveStatus::BudgetExhausted if r.forward_solves < max_passes => {
+                "stalled (paths handed back within the budget)".to_string()
+            }
+            s => format!("{s:?}"),
+        };
+        let e = by_status.entry(status).or_default();
+        e.0 += 1;
+        e.1 += usize::from(ws.taut() != taut_before.as_slice());
+        if probes < probed {
+            probes += 1;
+            // the warm path from the chain's last converged sample (its state is
+            // the rolled-back one), unbudgeted, steps down to 1/2560 of the way
+            let mut w = ws.clone();
+            w.set_tendon_settings(*full.tendon_settings())?;
+            let reached = path(&mut w, &from, &q);
+            let budget_out = max_passes > 0 && r.forward_solves >= max_passes;
+            let class = if budget_out && reached >= 1.0 {
+                "budget out (unbudgeted steps reach it)"
+            } else if reached >= 1.0 {
+                "start too far (its paths stalled; small steps from the last converged sample reach it)"
+            } else if reached == 0.0 {
+                "no equilibrium near the start (not even 1/2560 of the way)"
+            } else if w.taut() != taut_before.as_slice() {
+                "fold along the warm path, after a slack/taut change"
+            } else {
+                "fold along the warm path, same taut set as the start"
+            };
+            *classes.entry(class).or_default() += 1;
         }
     }
     println!(
@@ -116,6 +161,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             1e3 * s / c1,
             w as f64 / c1
         );
+    }
+    println!(
+        "  failed by the first solve's status (of which its last iterate changed the taut set):"
+    );
+    for (s, (c, changed)) in &by_status {
+        println!("    {s:46} {c:5} ({changed})");
+    }
+    println!(
+        "  the first {probes} failed samples, by where the warm path from the last converged sample ends (unbudgeted, steps 1/40 down to 1/2560):"
+    );
+    for (c, n) in &classes {
+        println!("    {n:5} {c}");
     }
     let pull = |q: &[f64]| -> Vec<f64> {
         (0..3)
@@ -186,5 +243,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "  of {tried} failed samples, reached unbudgeted: straight from reading 0 {straight}, one section at a time proximal first {}, distal first {}, pay-outs first {}",
         other[0], other[1], other[2]
     );
+    // the distal section's three tendons pulled together from reading 0, by steps
+    // of 0.1 mm, warm, unbudgeted: where the near-straight branch ends
+    let distal = section.iter().copied().max().unwrap_or(0);
+    let mut w = full.clone();
+    let mut last = (0.0, 0.0, 0usize);
+    for k in 1..=130 {
+        let pull = f64::from(k) * 1e-4;
+        let q: Vec<f64> = section
+            .iter()
+            .map(|&s| if s == distal { pull } else { 0.0 })
+            .collect();
+        let r = w.solve_readings(&q)?;
+        if !r.status.is_converged() {
+            println!(
+                "  distal section's tendons pulled together: converged up to {:.1} mm (tension {:.2} N each, {} passes at the last step), {:?} at {:.1} mm",
+                last.0 * 1e3,
+                last.1,
+                last.2,
+                r.status,
+                pull * 1e3
+            );
+            break;
+        }
+        let t = (0..p)
+            .filter(|&i| section[i] == distal)
+            .map(|i| w.tensions()[i]);
+        last = (pull, t.fold(0.0, f64::max), r.forward_solves);
+    }
     Ok(())
 }

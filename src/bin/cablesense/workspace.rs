@@ -29,6 +29,8 @@ const COVERAGE_POINTS: usize = 200_000;
 const DRAWN_POINTS: usize = 6000;
 /// A tip this far outside a hull plane still counts as inside (m): round-off.
 const INSIDE_TOLERANCE_M: f64 = 1e-9;
+/// A retried sample's tip and a cold solve's this close are one equilibrium (m).
+const SAME_TIP_M: f64 = 1e-6;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -67,6 +69,22 @@ pub struct Args {
     /// rod (slow: 0.1 to 0.4 s a failing sample on FTDCR v4).
     #[arg(long)]
     cold_retry: bool,
+    /// Retry pass: a failed sample warm from each of its N nearest solved ones.
+    #[arg(long, default_value_t = WorkspaceSettings::DEFAULT_RETRY_NEIGHBOURS)]
+    retry_neighbours: usize,
+    /// Retry pass: solves of the continuation from the nearest solved sample.
+    #[arg(long, default_value_t = WorkspaceSettings::DEFAULT_RETRY_STEPS)]
+    retry_steps: usize,
+    /// Retry pass: one more solve cold from the reference.
+    #[arg(long)]
+    retry_cold: bool,
+    /// Rod passes of each retry solve (0: as --max-passes).
+    #[arg(long, default_value_t = WorkspaceSettings::DEFAULT_RETRY_PASSES)]
+    retry_passes: usize,
+    /// Check each retried sample by a cold solve at its readings (another tip: a
+    /// second equilibrium).
+    #[arg(long)]
+    check_retries: bool,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -134,6 +152,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         max_passes: (a.max_passes > 0).then_some(a.max_passes),
         max_substeps: a.substeps,
         cold_retry: a.cold_retry,
+        retry_neighbours: a.retry_neighbours,
+        retry_steps: a.retry_steps,
+        retry_cold: a.retry_cold,
+        retry_passes: (a.retry_passes > 0).then_some(a.retry_passes),
+        check_retries: a.check_retries,
         marker_offset_m: marker_offset,
         ..WorkspaceSettings::default()
     };
@@ -163,13 +186,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     write_obj(&hull, &name, &a.output.join("hull.obj"))?;
     // where the work went: rod passes per status (deterministic, unlike times)
     let work = cloud.passes_by_status();
-    let names = [
-        SampleStatus::Converged,
-        SampleStatus::ConvergedStepped,
-        SampleStatus::ConvergedCold,
-        SampleStatus::Failed,
-    ]
-    .map(SampleStatus::name);
+    let names = SampleStatus::ALL.map(SampleStatus::name);
     let total_passes: u64 = work.iter().map(|w| w.1).sum();
     let work_json: serde_json::Map<String, serde_json::Value> = names
         .iter()
@@ -191,19 +208,35 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    let count = |s: SampleStatus| cloud.status.iter().filter(|x| **x == s).count();
+    let by_stop = cloud.failed_by_stop();
+    let by_stop_json: serde_json::Map<String, serde_json::Value> = by_stop
+        .iter()
+        .map(|(s, c)| (stop_name(*s), serde_json::json!(c)))
+        .collect();
+    let checks = cloud.retry_checks(SAME_TIP_M);
+    // the largest residual of a sample a retry solved (m)
+    let retried = |(s, _): &(&SampleStatus, _)| s.is_solved() && **s != SampleStatus::Converged;
+    let residuals = cloud.status.iter().zip(&cloud.residual_m).filter(retried);
+    let retried_residual = residuals.map(|(_, r)| *r).fold(f64::NAN, f64::max);
     // coverage of a recording
     let mut summary = serde_json::json!({
         "scene": name,
         "samples": cloud.len(),
         "solved": tips.len(),
+        "solved_neighbour": count(SampleStatus::ConvergedNeighbour),
         "solved_stepped": cloud.stepped(),
         "solved_cold": cloud.cold(),
         "failed": cloud.failed(),
+        "failed_by_last_solve": by_stop_json,
         "sampling_s": sample_s,
         "chunk_samples": settings.chunk_samples,
         "max_passes": settings.max_passes,
         "max_substeps": settings.max_substeps,
         "cold_retry": settings.cold_retry,
+        "retry_neighbours": settings.retry_neighbours, "retry_steps": settings.retry_steps,
+        "retry_cold": settings.retry_cold, "retry_passes": settings.retry_passes,
+        "check_retries": settings.check_retries,
         "rod_passes": work_json,
         "hull_vertices": hull.vertices.len(),
         "hull_triangles": hull.triangles.len(),
@@ -214,14 +247,35 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         "columns": cloud.columns,
     });
     let mut lines = vec![format!(
-        "{} samples ({name}): {} solved ({} by continuation from the previous sample, {} after a cold retry), {} failed, in {:.1} s",
+        "{} samples ({name}): {} solved ({} by a retry from a neighbour, {} by continuation, {} cold), {} failed, in {:.1} s",
         cloud.len(),
         tips.len(),
+        count(SampleStatus::ConvergedNeighbour),
         cloud.stepped(),
         cloud.cold(),
         cloud.failed(),
         sample_s
     )];
+    if !by_stop.is_empty() {
+        lines.push(format!(
+            "failed samples by how their last solve ended: {}",
+            by_stop
+                .iter()
+                .map(|(s, c)| format!("{} {c}", stop_name(*s)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    if settings.check_retries {
+        summary["retry_checks"] = serde_json::json!({
+            "same_tip_tolerance_m": SAME_TIP_M, "same_tip": checks.0, "other_tip": checks.1,
+            "cold_not_converged": checks.2, "max_residual_m": retried_residual,
+        });
+        lines.push(format!(
+            "retried samples (largest residual {retried_residual:.1e} m) checked by a cold solve at the same readings: {} the same tip (within {SAME_TIP_M:e} m), {} another tip (a second equilibrium), {} where the cold solve did not converge",
+            checks.0, checks.1, checks.2
+        ));
+    }
     lines.push(work_line);
     lines.push(format!(
         "convex hull: {} vertices, {} triangles, volume {:.1} cm^3 ({:.3e} m^3); solved tips outside it: {outside}",
@@ -353,12 +407,19 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     })
 }
 
+/// A solve's status as in files (`stalled`, ...; `None`: readings rejected).
+fn stop_name(s: Option<cablesense::statics::SolveStatus>) -> String {
+    s.and_then(|s| serde_json::to_value(s).ok())
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_else(|| "readings_rejected".into())
+}
+
 fn write_cloud(cloud: &WorkspaceCloud, scale: f64, path: &Path) -> anyhow::Result<()> {
     let mut s = String::new();
     let markers = !cloud.markers_m.is_empty();
     writeln!(
         s,
-        "sample,{},tip_x_m,tip_y_m,tip_z_m,{}status,rod_passes",
+        "sample,{},tip_x_m,tip_y_m,tip_z_m,{}last_solve,residual_m,retry_check_m,status,rod_passes",
         cloud.columns.join(","),
         if markers {
             "marker_x_m,marker_y_m,marker_z_m,"
@@ -378,7 +439,15 @@ fn write_cloud(cloud: &WorkspaceCloud, scale: f64, path: &Path) -> anyhow::Resul
             let m = cloud.markers_m[k];
             write!(s, "{},{},{},", m.x, m.y, m.z)?;
         }
-        writeln!(s, "{},{}", cloud.status[k].name(), cloud.passes[k])?;
+        writeln!(
+            s,
+            "{},{},{},{},{}",
+            stop_name(cloud.stop[k]),
+            cloud.residual_m[k],
+            cloud.retry_check_m[k],
+            cloud.status[k].name(),
+            cloud.passes[k]
+        )?;
     }
     std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
 }

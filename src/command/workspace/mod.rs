@@ -45,6 +45,22 @@
 //! converges doubled) and an unbudgeted cold retry
 //! ([`WorkspaceSettings::cold_retry`]).
 //!
+//! **Retries.** After a chain's first pass, its failed samples can be solved again
+//! in the same order (so the cloud stays independent of the threads), in order of
+//! cost: warm from each of the [`WorkspaceSettings::retry_neighbours`] solved
+//! samples of the chain nearest it in the unit cube (their converged states kept
+//! from the first pass; a sample a retry solves becomes a start for those after
+//! it); by continuation along the straight readings path from the nearest one
+//! ([`WorkspaceSettings::retry_steps`]); cold from the reference
+//! ([`WorkspaceSettings::retry_cold`]); each solve under
+//! [`WorkspaceSettings::retry_passes`]. With [`WorkspaceSettings::check_retries`]
+//! a retried sample is checked by a cold solve at the same readings
+//! ([`WorkspaceCloud::retry_check_m`]: the same tip, another tip, i.e. a second
+//! equilibrium, or no convergence). Every sample keeps why its last solve stopped
+//! ([`WorkspaceCloud::stop`]). On the calibrated FTDCR v4 they raise the solved
+//! share little (docs/command.md: the failures lie past a fold of every path
+//! tried, and the cold path from the reference stalls at the same fold).
+//!
 //! **Hull.** The convex hull of the converged tips is the `chull` crate's exact
 //! (big-integer predicates) quickhull (Barber, Dobkin & Huhdanpaa, "The quickhull
 //! algorithm for convex hulls", ACM TOMS 22(4), 1996); the volume is the sum of the
@@ -54,6 +70,7 @@
 //! Layering: uses `tendons` and `robot`; no file or terminal I/O.
 
 mod hull;
+mod retry;
 mod sample;
 mod sequence;
 
@@ -62,6 +79,7 @@ pub use sample::sample_workspace;
 pub use sequence::{halton, nearest_neighbour_order, radical_inverse};
 
 use crate::error::ModelError;
+use crate::statics::SolveStatus;
 use nalgebra::Vector3;
 
 /// Settings of [`sample_workspace`] (plain numbers; defaults below).
@@ -99,6 +117,24 @@ pub struct WorkspaceSettings {
     /// (`numerics.tendons.max_shooting_solves`, lowered to this when above it):
     /// bounds the unbudgeted solves (`max_passes = None`, `cold_retry`). Default 6.
     pub max_shooting_solves: usize,
+    /// Retry pass (module docs, "Retries"): a failed sample is solved again, warm,
+    /// from each of its this many nearest solved samples of its chain (in the
+    /// box scaled to the unit cube; their converged states are kept). Default 0.
+    pub retry_neighbours: usize,
+    /// Retry pass: most solves of the continuation along the straight readings
+    /// path from the nearest solved sample of the chain (a step that fails is
+    /// halved, one that converges doubled). Default 0.
+    pub retry_steps: usize,
+    /// Retry pass: one more solve cold from the reference (zero readings, the
+    /// pretensions), continued in the readings, under `retry_passes`. Default false.
+    pub retry_cold: bool,
+    /// Rod passes of each solve of the retry pass (`None`: `max_passes`). Default
+    /// `Some(40)` ([`WorkspaceSettings::DEFAULT_RETRY_PASSES`]).
+    pub retry_passes: Option<usize>,
+    /// Check each sample a retry solved by a cold solve at the same readings
+    /// ([`WorkspaceCloud::retry_check_m`]; its passes are not counted). Default
+    /// false.
+    pub check_retries: bool,
     /// A point fixed to the tip body, in the tip's local frame (m): when given, each
     /// solved sample records it too ([`WorkspaceCloud::markers_m`]), e.g. a
     /// calibration's `marker_offset_m`, so that a recording's measured markers can be
@@ -117,12 +153,29 @@ impl Default for WorkspaceSettings {
             max_substeps: 0,
             cold_retry: false,
             max_shooting_solves: 6,
+            retry_neighbours: Self::DEFAULT_RETRY_NEIGHBOURS,
+            retry_steps: Self::DEFAULT_RETRY_STEPS,
+            retry_cold: false,
+            retry_passes: Some(Self::DEFAULT_RETRY_PASSES),
+            check_retries: false,
             marker_offset_m: None,
         }
     }
 }
 
 impl WorkspaceSettings {
+    /// Default of [`WorkspaceSettings::retry_neighbours`]: 4 (on 2000 FTDCR v4
+    /// samples, with 40 passes a retry: 10 more solved at 2.1 times the rod
+    /// passes; 8 neighbours at 30 passes: 20 more at 2.8 times, and on 20,000
+    /// samples 120 s of CPU, past the 60 s on two cores; docs/command.md).
+    pub const DEFAULT_RETRY_NEIGHBOURS: usize = 4;
+    /// Default of [`WorkspaceSettings::retry_passes`]: 40 (a converged FTDCR v4
+    /// sample takes 24 on average; the rest of a failing retry's passes would go
+    /// to the cold path from the reference, which stalls at the same fold).
+    pub const DEFAULT_RETRY_PASSES: usize = 40;
+    /// Default of [`WorkspaceSettings::retry_steps`].
+    pub const DEFAULT_RETRY_STEPS: usize = 0;
+
     /// Check every number; the error names the field.
     pub fn validate(&self) -> Result<(), ModelError> {
         for (f, v) in [
@@ -130,6 +183,7 @@ impl WorkspaceSettings {
             ("workspace.chunk_samples", self.chunk_samples),
             ("workspace.max_shooting_solves", self.max_shooting_solves),
             ("workspace.max_passes", self.max_passes.unwrap_or(1)),
+            ("workspace.retry_passes", self.retry_passes.unwrap_or(1)),
         ] {
             if v == 0 {
                 return Err(ModelError::OutOfRange {
@@ -139,17 +193,27 @@ impl WorkspaceSettings {
                 });
             }
         }
-        if let Some(m) = self.max_passes.filter(|&m| m > 100_000) {
-            return Err(ModelError::OutOfRange {
-                field: "workspace.max_passes".into(),
-                value: m as f64,
-                why: "between 1 and 100000 (numerics.tendons.max_passes)".into(),
-            });
+        for (f, v) in [
+            ("workspace.max_passes", self.max_passes),
+            ("workspace.retry_passes", self.retry_passes),
+        ] {
+            if let Some(m) = v.filter(|&m| m > 100_000) {
+                return Err(ModelError::OutOfRange {
+                    field: f.into(),
+                    value: m as f64,
+                    why: "between 1 and 100000 (numerics.tendons.max_passes)".into(),
+                });
+            }
         }
         if let Some(o) = &self.marker_offset_m {
             ModelError::finite3("workspace.marker_offset_m", &[o.x, o.y, o.z])?;
         }
         Ok(())
+    }
+
+    /// Whether the retry pass runs (any of its retries is on).
+    pub fn retries(&self) -> bool {
+        self.retry_neighbours > 0 || self.retry_steps > 0 || self.retry_cold
     }
 }
 
@@ -160,10 +224,15 @@ pub enum SampleStatus {
     /// (under a budget, or on the path from reading 0 within the same budget).
     Converged,
     /// Converged by continuation from the chain's last converged sample
-    /// ([`WorkspaceSettings::max_substeps`]).
+    /// ([`WorkspaceSettings::max_substeps`]) or, in the retry pass, from the
+    /// nearest solved sample ([`WorkspaceSettings::retry_steps`]).
     ConvergedStepped,
-    /// Converged by the cold retry ([`WorkspaceSettings::cold_retry`]).
+    /// Converged by the cold retry ([`WorkspaceSettings::cold_retry`], or
+    /// [`WorkspaceSettings::retry_cold`] in the retry pass).
     ConvergedCold,
+    /// Converged in the retry pass, warm from one of the nearest solved samples of
+    /// its chain ([`WorkspaceSettings::retry_neighbours`]).
+    ConvergedNeighbour,
     /// No solve converged (or the readings were rejected): no tip, counted.
     Failed,
 }
@@ -175,9 +244,18 @@ impl SampleStatus {
             Self::Converged => "converged",
             Self::ConvergedStepped => "converged_stepped",
             Self::ConvergedCold => "converged_cold",
+            Self::ConvergedNeighbour => "converged_neighbour",
             Self::Failed => "failed",
         }
     }
+    /// Every status, in the order of [`WorkspaceCloud::passes_by_status`].
+    pub const ALL: [SampleStatus; 5] = [
+        Self::Converged,
+        Self::ConvergedNeighbour,
+        Self::ConvergedStepped,
+        Self::ConvergedCold,
+        Self::Failed,
+    ];
     /// A tip is available.
     pub fn is_solved(self) -> bool {
         self != Self::Failed
@@ -201,11 +279,25 @@ pub struct WorkspaceCloud {
     pub markers_m: Vec<Vector3<f64>>,
     /// Status of each sample.
     pub status: Vec<SampleStatus>,
+    /// How each sample's last solve ended: `Converged` for a solved sample; for a
+    /// failed one why it stopped (`Stalled`, `MaxIterations`, `BudgetExhausted`,
+    /// ...; `None`: its readings were rejected).
+    pub stop: Vec<Option<SolveStatus>>,
     /// Work of each sample: rod passes of all its solves
     /// ([`crate::tendons::TendonReport::forward_solves`], line-search trials and
     /// the nested method's passes included). Deterministic, unlike a time: where
     /// the sampling's time goes, per status ([`WorkspaceCloud::passes_by_status`]).
     pub passes: Vec<u32>,
+    /// `max_i |G_i|` (m; the tendon conditions' residual,
+    /// [`crate::tendons::TendonReport::residual_m`]) of the solve that solved each
+    /// sample (at most `numerics.tendons.tolerance_m`), or of a failed sample's
+    /// first solve. NaN when no solve ran.
+    pub residual_m: Vec<f64>,
+    /// For each sample a retry solved, with [`WorkspaceSettings::check_retries`]:
+    /// the distance from its tip to the tip of a cold solve from the reference at
+    /// the same readings (m; a distance above round-off is a second equilibrium).
+    /// NaN when not checked or when that cold solve did not converge.
+    pub retry_check_m: Vec<f64>,
 }
 
 impl PartialEq for WorkspaceCloud {
@@ -224,7 +316,10 @@ impl PartialEq for WorkspaceCloud {
             && points(&self.tips_m, &other.tips_m)
             && points(&self.markers_m, &other.markers_m)
             && self.status == other.status
+            && self.stop == other.stop
             && self.passes == other.passes
+            && bits(&self.residual_m, &other.residual_m)
+            && bits(&self.retry_check_m, &other.retry_check_m)
     }
 }
 
@@ -271,21 +366,59 @@ impl WorkspaceCloud {
             .filter(|s| **s == SampleStatus::ConvergedStepped)
             .count()
     }
-    /// Per status (converged, stepped, cold, failed): samples and their rod passes
-    /// summed.
-    pub fn passes_by_status(&self) -> [(usize, u64); 4] {
-        let mut out = [(0usize, 0u64); 4];
+    /// Per status (in the order of [`SampleStatus::ALL`]: converged, neighbour,
+    /// stepped, cold, failed): samples and their rod passes summed.
+    pub fn passes_by_status(&self) -> [(usize, u64); 5] {
+        let mut out = [(0usize, 0u64); 5];
         for (s, &p) in self.status.iter().zip(&self.passes) {
-            let i = match s {
-                SampleStatus::Converged => 0,
-                SampleStatus::ConvergedStepped => 1,
-                SampleStatus::ConvergedCold => 2,
-                SampleStatus::Failed => 3,
-            };
+            let i = SampleStatus::ALL.iter().position(|x| x == s).unwrap_or(4);
             out[i].0 += 1;
             out[i].1 += u64::from(p);
         }
         out
+    }
+    /// The failed samples by how their last solve ended, most frequent first
+    /// (ties by name; `None`: readings rejected).
+    pub fn failed_by_stop(&self) -> Vec<(Option<SolveStatus>, usize)> {
+        let mut out: Vec<(Option<SolveStatus>, usize)> = Vec::new();
+        for (s, stop) in self.status.iter().zip(&self.stop) {
+            if s.is_solved() {
+                continue;
+            }
+            match out.iter_mut().find(|(x, _)| x == stop) {
+                Some(e) => e.1 += 1,
+                None => out.push((*stop, 1)),
+            }
+        }
+        out.sort_by(|a, b| {
+            b.1.cmp(&a.1)
+                .then(format!("{:?}", a.0).cmp(&format!("{:?}", b.0)))
+        });
+        out
+    }
+    /// Samples solved by a retry and checked ([`WorkspaceCloud::retry_check_m`]):
+    /// (the cold solve reached the same tip within `tol_m`, a different tip, did
+    /// not converge).
+    pub fn retry_checks(&self, tol_m: f64) -> (usize, usize, usize) {
+        let mut c = (0, 0, 0);
+        for (s, d) in self.status.iter().zip(&self.retry_check_m) {
+            if !matches!(
+                s,
+                SampleStatus::ConvergedNeighbour
+                    | SampleStatus::ConvergedStepped
+                    | SampleStatus::ConvergedCold
+            ) {
+                continue;
+            }
+            if d.is_nan() {
+                c.2 += 1;
+            } else if *d <= tol_m {
+                c.0 += 1;
+            } else {
+                c.1 += 1;
+            }
+        }
+        c
     }
     /// Samples that needed the cold retry.
     pub fn cold(&self) -> usize {

@@ -1,35 +1,25 @@
 //! Solving the sampled readings in warm chains, in parallel (module docs of
 //! [`super`]).
 
+use super::retry::{ok, solve_status, tip_and_marker, Outcome, RetryPass};
 use super::sequence::{nearest_neighbour_order, nth_prime, radical_inverse};
 use super::{SampleStatus, WorkspaceCloud, WorkspaceSettings};
 use crate::error::ModelError;
 use crate::robot::ActuatorLimits;
 use crate::settings::TendonSettings;
-use crate::statics::Start;
+use crate::statics::{SolveStatus, Start};
 use crate::tendons::TendonWorkspace;
 use nalgebra::Vector3;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
-
-/// One solve of `q` from `start`: converged or not, its rod passes added to `work`.
-fn solve_ok(ws: &mut TendonWorkspace, q: &[f64], start: Start, work: &mut u32) -> bool {
-    match ws.solve_readings_from(q, start) {
-        Ok(r) => {
-            *work = work.saturating_add(u32::try_from(r.forward_solves).unwrap_or(u32::MAX));
-            r.status.is_converged()
-        }
-        Err(_) => false,
-    }
-}
 
 /// Solve one sample's readings `q`, warm from the chain's last converged readings
 /// `from` (updated on success): directly; else, when `settings.max_substeps > 0`,
 /// by continuation along the segment from `from` to `q` (a step that fails is
 /// halved, one that converges is doubled, at most `max_substeps` solves); else,
 /// with `settings.cold_retry`, cold without a budget (`cold`: the workspace's
-/// settings for it). `buf` is scratch of `q`'s length. Returns the status and the
-/// rod passes spent.
+/// settings for it). `buf` is scratch of `q`'s length. Returns the status, the
+/// status of the last solve and the rod passes spent.
 fn solve_sample(
     ws: &mut TendonWorkspace,
     q: &[f64],
@@ -37,11 +27,12 @@ fn solve_sample(
     buf: &mut [f64],
     settings: &WorkspaceSettings,
     cold: &Option<(TendonSettings, TendonSettings)>,
-) -> (SampleStatus, u32) {
+) -> (SampleStatus, Option<SolveStatus>, u32) {
     let mut work = 0u32;
-    if solve_ok(ws, q, Start::Warm, &mut work) {
+    let mut stop = solve_status(ws, q, Start::Warm, &mut work);
+    if ok(stop) {
         from.copy_from_slice(q);
-        return (SampleStatus::Converged, work);
+        return (SampleStatus::Converged, stop, work);
     }
     // (a failed solve is rolled back: the warm state is `from`'s again)
     let (mut t, mut h) = (0.0f64, 0.5f64);
@@ -50,11 +41,16 @@ fn solve_sample(
         for ((b, a), z) in buf.iter_mut().zip(from.iter()).zip(q) {
             *b = a + tn * (z - a);
         }
-        if solve_ok(ws, buf, Start::Warm, &mut work) {
+        // (a converged step short of `q` is not the sample's stop)
+        let step = solve_status(ws, buf, Start::Warm, &mut work);
+        if !ok(step) {
+            stop = step;
+        }
+        if ok(step) {
             t = tn;
             if t >= 1.0 {
                 from.copy_from_slice(q);
-                return (SampleStatus::ConvergedStepped, work);
+                return (SampleStatus::ConvergedStepped, step, work);
             }
             h *= 2.0;
         } else {
@@ -70,17 +66,101 @@ fn solve_sample(
     }
     if let Some((unbudgeted, budgeted)) = cold {
         // (settings valid: checked when the chain's workspace was set up)
-        let ok =
-            ws.set_tendon_settings(*unbudgeted).is_ok() && solve_ok(ws, q, Start::Cold, &mut work);
-        if ok {
+        let solved = ws.set_tendon_settings(*unbudgeted).is_ok() && {
+            stop = solve_status(ws, q, Start::Cold, &mut work);
+            ok(stop)
+        };
+        if solved {
             from.copy_from_slice(q);
         }
         let _ = ws.set_tendon_settings(*budgeted);
-        if ok {
-            return (SampleStatus::ConvergedCold, work);
+        if solved {
+            return (SampleStatus::ConvergedCold, stop, work);
         }
     }
-    (SampleStatus::Failed, work)
+    (SampleStatus::Failed, stop, work)
+}
+
+/// What every chain shares: the workspace it copies, the settings of the
+/// sampling, of the in-chain cold retry and of the retry pass, and the progress.
+struct Shared<'a> {
+    base: &'a TendonWorkspace,
+    settings: &'a WorkspaceSettings,
+    cold: Option<(TendonSettings, TendonSettings)>,
+    retry_settings: TendonSettings,
+    p: usize,
+    zero_unit: &'a [f64],
+    done: &'a AtomicUsize,
+    progress: &'a (dyn Fn(usize) + Sync),
+}
+
+impl Shared<'_> {
+    fn tick(&self) {
+        (self.progress)(self.done.fetch_add(1, Ordering::Relaxed) + 1);
+    }
+
+    /// One chain over the chunk's unit points and readings (chunk-local, `p` per
+    /// sample): the first pass in nearest-neighbour order from reading 0, then the
+    /// retry pass over its failed samples in the same order. Per chunk-local
+    /// sample, its outcome.
+    fn chain(&self, unit: &[f64], readings: &[f64]) -> Vec<Outcome> {
+        let (p, settings) = (self.p, self.settings);
+        let n = unit.len() / p;
+        let retries = settings.retries();
+        // a fresh copy per chunk: the result does not depend on the threads
+        let mut ws = self.base.clone();
+        let order = nearest_neighbour_order(unit, p, self.zero_unit);
+        let mut out = vec![Outcome::failed(None, 0); n];
+        let mut states: Vec<Option<TendonWorkspace>> = vec![None; if retries { n } else { 0 }];
+        // each chain starts from reading 0 (a known converged state)
+        let mut from = vec![0.0; p];
+        let mut buf = vec![0.0; p];
+        let mut w0 = 0u32;
+        let start_ok = ok(solve_status(&mut ws, &from, Start::Warm, &mut w0))
+            || ok(solve_status(&mut ws, &from, Start::Cold, &mut w0));
+        for &j in &order {
+            let q = &readings[j * p..(j + 1) * p];
+            let (status, stop, work) = if start_ok {
+                solve_sample(&mut ws, q, &mut from, &mut buf, settings, &self.cold)
+            } else {
+                (SampleStatus::Failed, None, 0)
+            };
+            let o = &mut out[j];
+            o.status = status;
+            o.stop = stop;
+            o.work = work;
+            if start_ok {
+                o.residual_m = ws.report().residual_m;
+            }
+            if status.is_solved() {
+                (o.tip, o.marker) = tip_and_marker(&mut ws, settings.marker_offset_m);
+                if retries {
+                    states[j] = Some(ws.clone().without_rollback());
+                }
+            }
+            if !(retries && start_ok) || status.is_solved() {
+                self.tick();
+            }
+        }
+        if retries && start_ok {
+            let mut pass = RetryPass {
+                unit,
+                readings,
+                p,
+                states,
+                base: self.base,
+                retry_settings: self.retry_settings,
+                settings,
+            };
+            for &j in &order {
+                if !out[j].status.is_solved() {
+                    pass.retry(j, &mut out[j]);
+                    self.tick();
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Sample the reachable workspace of `tw` over the box of `limits` (every driven
@@ -127,6 +207,11 @@ pub fn sample_workspace(
     unbudgeted.validate()?;
     base.set_tendon_settings(ts)?;
     let cold = settings.cold_retry.then_some((unbudgeted, ts));
+    let mut retry_settings = ts;
+    if settings.retry_passes.is_some() {
+        retry_settings.max_passes = settings.retry_passes;
+    }
+    retry_settings.validate()?;
     let n = settings.samples;
     // unit-cube Halton points k = 1..=n (k = 0 is the corner q_min)
     let mut unit = Vec::with_capacity(n * p);
@@ -163,52 +248,31 @@ pub fn sample_workspace(
     .max(1);
     let next_chunk = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
-    type Row = (usize, Vector3<f64>, Vector3<f64>, SampleStatus, u32);
-    let results: Mutex<Vec<Row>> = Mutex::new(Vec::with_capacity(n));
+    let shared = Shared {
+        base: &base,
+        settings,
+        cold,
+        retry_settings,
+        p,
+        zero_unit: &zero_unit,
+        done: &done,
+        progress,
+    };
+    let results: Mutex<Vec<(usize, Outcome)>> = Mutex::new(Vec::with_capacity(n));
     let first_error: Mutex<Option<ModelError>> = Mutex::new(None);
     std::thread::scope(|s| {
         for _ in 0..threads {
             s.spawn(|| loop {
                 let c = next_chunk.fetch_add(1, Ordering::Relaxed);
                 let Some(range) = chunks.get(c) else { break };
-                // a fresh copy per chunk: the result does not depend on the threads
-                let mut ws = base.clone();
-                let order =
-                    nearest_neighbour_order(&unit[range.start * p..range.end * p], p, &zero_unit);
-                let mut out = Vec::with_capacity(order.len());
-                // each chain starts from reading 0 (a known converged state)
-                let mut from = vec![0.0; p];
-                let mut buf = vec![0.0; p];
-                let mut w0 = 0u32;
-                let start_ok = solve_ok(&mut ws, &from, Start::Warm, &mut w0)
-                    || solve_ok(&mut ws, &from, Start::Cold, &mut w0);
-                for j in order {
-                    let k = range.start + j;
-                    let q = &readings_m[k * p..(k + 1) * p];
-                    let (status, work) = if start_ok {
-                        solve_sample(&mut ws, q, &mut from, &mut buf, settings, &cold)
-                    } else {
-                        (SampleStatus::Failed, 0)
-                    };
-                    let nan = Vector3::repeat(f64::NAN);
-                    let (tip, marker) = if status.is_solved() {
-                        let tip = ws.tip_position();
-                        let marker = match settings.marker_offset_m {
-                            Some(o) => {
-                                let pose = *ws.workspace_mut().solution().tip();
-                                pose.position + pose.rotation * o
-                            }
-                            None => nan,
-                        };
-                        (tip, marker)
-                    } else {
-                        (nan, nan)
-                    };
-                    out.push((k, tip, marker, status, work));
-                    progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                }
+                let (a, b) = (range.start * p, range.end * p);
+                let out = shared.chain(&unit[a..b], &readings_m[a..b]);
                 match results.lock() {
-                    Ok(mut r) => r.extend(out),
+                    Ok(mut r) => r.extend(
+                        out.into_iter()
+                            .enumerate()
+                            .map(|(j, o)| (range.start + j, o)),
+                    ),
                     Err(_) => {
                         if let Ok(mut e) = first_error.lock() {
                             e.get_or_insert(ModelError::Invalid {
@@ -231,12 +295,18 @@ pub fn sample_workspace(
     let mut tips_m = vec![Vector3::repeat(f64::NAN); n];
     let mut markers_m = vec![Vector3::repeat(f64::NAN); n];
     let mut status = vec![SampleStatus::Failed; n];
+    let mut stop = vec![None; n];
     let mut passes = vec![0u32; n];
-    for (k, t, m, s, w) in results {
-        tips_m[k] = t;
-        markers_m[k] = m;
-        status[k] = s;
-        passes[k] = w;
+    let mut retry_check_m = vec![f64::NAN; n];
+    let mut residual_m = vec![f64::NAN; n];
+    for (k, o) in results {
+        tips_m[k] = o.tip;
+        markers_m[k] = o.marker;
+        status[k] = o.status;
+        stop[k] = o.stop;
+        passes[k] = o.work;
+        retry_check_m[k] = o.check_m;
+        residual_m[k] = o.residual_m;
     }
     if settings.marker_offset_m.is_none() {
         markers_m.clear();
@@ -247,6 +317,9 @@ pub fn sample_workspace(
         tips_m,
         markers_m,
         status,
+        stop,
         passes,
+        residual_m,
+        retry_check_m,
     })
 }

@@ -67,6 +67,33 @@ pub fn nearest_neighbour_order(points: &[f64], dim: usize, start: &[f64]) -> Vec
     order
 }
 
+/// Up to `k` indices `i != j` with `solved[i]` set, nearest point `j` of `points`
+/// (each `dim` long, flat; Euclidean), nearest first, ties by index.
+pub(super) fn nearest_solved<T>(
+    points: &[f64],
+    dim: usize,
+    j: usize,
+    solved: &[Option<T>],
+    k: usize,
+) -> Vec<usize> {
+    let x = &points[j * dim..(j + 1) * dim];
+    let mut near: Vec<(f64, usize)> = solved
+        .iter()
+        .enumerate()
+        .filter(|(i, s)| *i != j && s.is_some())
+        .map(|(i, _)| {
+            let d: f64 = points[i * dim..(i + 1) * dim]
+                .iter()
+                .zip(x)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum();
+            (d, i)
+        })
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    near.into_iter().take(k).map(|(_, i)| i).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -84,5 +111,13 @@ mod tests {
         let pts = [0.0, 0.0, 5.0, 5.0, 1.0, 1.0, 4.0, 4.0];
         let o = nearest_neighbour_order(&pts, 2, &[0.0, 0.0]);
         assert_eq!(o, vec![0, 2, 3, 1]);
+    }
+
+    #[test]
+    fn nearest_solved_skips_itself_and_the_unsolved() {
+        let pts = [0.0, 0.0, 5.0, 5.0, 1.0, 1.0, 4.0, 4.0];
+        let solved = [Some(()), Some(()), None, Some(())];
+        assert_eq!(nearest_solved(&pts, 2, 2, &solved, 2), vec![0, 3]);
+        assert_eq!(nearest_solved(&pts, 2, 0, &solved, 5), vec![3, 1]);
     }
 }
