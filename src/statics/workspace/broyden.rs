@@ -15,7 +15,7 @@
 //! before, 4.0 with the updates alone), and the exact Jacobian is still refreshed
 //! when a step fails to contract (`CHORD_CONTRACTION`).
 //!
-//! Warm solves without load parameters only (`Workspace::use_broyden`; the estimators'
+//! Warm solves without load parameters only (`Jacobian::use_broyden` of `parts.rs`; the estimators'
 //! inner solves keep their paths): cold solves and continuation keep the
 //! plain chord steps (`forward_cold_tensioned` took 1.6x as long with the updates).
 //! `H` is rebuilt from the LU factors whenever they change (any factorisation, also

@@ -14,12 +14,13 @@ impl Workspace {
     /// termination, from the last `f64` pass (after a converged solve: of the
     /// solution). Empty for an unknown cable.
     pub fn cable_holes(&self, j: usize) -> &[Vector3<f64>] {
-        self.b64.holes.get(j).map_or(&[], |h| &h[..])
+        self.bufs.b64.holes.get(j).map_or(&[], |h| &h[..])
     }
 
     /// World position (m) of cable `j`'s hole in the base plate.
     pub fn base_hole_world(&self, j: usize) -> Vector3<f64> {
-        self.plan
+        self.prob
+            .plan
             .cables
             .get(j)
             .map_or(Vector3::zeros(), |c| c.base_hole)
@@ -29,18 +30,18 @@ impl Workspace {
     /// (`factors[k]` for the chord ending at route disk `k`); missing entries are 1.
     /// Takes effect from the next pass; no allocation.
     pub fn set_chord_factors(&mut self, j: usize, factors: &[f64]) {
-        if let Some(c) = self.plan.cables.get_mut(j) {
+        if let Some(c) = self.prob.plan.cables.get_mut(j) {
             for (k, f) in c.factor.iter_mut().enumerate() {
                 *f = factors.get(k).copied().unwrap_or(1.0);
             }
             // the last pass no longer matches the plan
-            self.last_pass = None;
+            self.bufs.last_pass = None;
         }
     }
 
     /// Per-chord tension factors of cable `j` now in effect.
     pub fn chord_factors(&self, j: usize) -> &[f64] {
-        self.plan.cables.get(j).map_or(&[], |c| &c.factor[..])
+        self.prob.plan.cables.get(j).map_or(&[], |c| &c.factor[..])
     }
 }
 
@@ -54,7 +55,7 @@ impl Workspace {
     /// the caller restores `LOCAL_TOL` before it reports a point.
     pub(crate) fn set_local_tolerance(&mut self, frac: f64) -> f64 {
         let t = self.settle_tolerance(frac);
-        self.b64.local_tol = t;
+        self.bufs.b64.local_tol = t;
         t
     }
 
@@ -77,7 +78,7 @@ impl Workspace {
     /// coupling settles the next holes from where the last pass left them. Elsewhere
     /// an evaluation can be kept and restored instead of repeated.
     pub(crate) fn settles_holes(&self) -> bool {
-        self.plan.condensed
+        self.prob.plan.condensed
     }
 }
 
@@ -102,7 +103,7 @@ mod tests {
             let ws = scene.tendon_workspace().expect("workspace");
             let ws = ws.workspace();
             let settles = coupling == CableCoupling::Condensed;
-            assert_eq!(ws.plan.condensed, settles, "{coupling:?}");
+            assert_eq!(ws.prob.plan.condensed, settles, "{coupling:?}");
             for (frac, want) in [(1e-12, 1e-12), (1.0, 1e-9), (0.0, LOCAL_TOL)] {
                 let want = if settles { want } else { LOCAL_TOL };
                 assert_eq!(ws.settle_tolerance(frac), want, "{coupling:?} {frac}");

@@ -37,9 +37,9 @@ impl Workspace {
     /// the branch-checked continuation directly.
     pub(super) fn solve_cold(&mut self) -> (SolveStatus, usize, usize) {
         self.cold_guess(1.0);
-        self.lu_valid = false;
-        self.b64.local_tol = self.settle_tolerance(1e-9);
-        if self.settings.branch_guard
+        self.jac.lu_valid = false;
+        self.bufs.b64.local_tol = self.settle_tolerance(1e-9);
+        if self.prob.settings.branch_guard
             && !self.guarded()
             && self.load_intensity() > CERTIFY_INTENSITY
         {
@@ -47,10 +47,10 @@ impl Workspace {
         }
         // A cold Newton from the straight rod is cut short (heavy damping means it is
         // far from the basin); continuation with a secant predictor is then cheaper.
-        let budget = if self.settings.continuation {
-            COLD_BUDGET.min(self.settings.max_iterations)
+        let budget = if self.prob.settings.continuation {
+            COLD_BUDGET.min(self.prob.settings.max_iterations)
         } else {
-            self.settings.max_iterations
+            self.prob.settings.max_iterations
         };
         let (mut status, mut iterations) = self.newton(1.0, budget);
         let mut steps = 0;
@@ -60,9 +60,9 @@ impl Workspace {
         if status.is_converged() && self.guarded() && self.conjugate_point().is_some() {
             status = SolveStatus::Unstable;
             // never hand back the unstable equilibrium as the best full-load iterate
-            self.best_res = f64::INFINITY;
+            self.it.best_res = f64::INFINITY;
         }
-        if !status.is_converged() && self.settings.continuation {
+        if !status.is_converged() && self.prob.settings.continuation {
             let (st, it, s) = self.continuation();
             status = st;
             iterations += it;
@@ -74,29 +74,16 @@ impl Workspace {
         (status, iterations, steps)
     }
 
-    /// Warm solve left its branch: after the first accepted step `d1`, Newton moved
-    /// the unknowns by more than `WARM_JUMP_RATIO |d1| + WARM_JUMP_FLOOR` (max norm).
-    pub(super) fn left_branch(&self) -> bool {
-        if !self.first_taken {
-            return false;
-        }
-        let d1 = max_abs_diff(&self.x_first, &self.x_start);
-        let rest = max_abs_diff(&self.x, &self.x_first);
-        let t1 = (self.tip_first - self.tip_start).norm() / self.plan.length;
-        let trest = (self.tip - self.tip_first).norm() / self.plan.length;
-        rest > WARM_JUMP_RATIO * d1 + WARM_JUMP_FLOOR
-            || trest > WARM_JUMP_RATIO * t1 + WARM_JUMP_FLOOR
-    }
-
-    /// [`Workspace::left_branch`], and for a large step under world-fixed loads of
+    /// [`left_branch`], and for a large step under world-fixed loads of
     /// intensity above [`CERTIFY_INTENSITY`] also Jacobi's test (one `Dual<3>` sweep,
     /// only then: the control loop's small steps, and mild loads, do not pay for it).
     pub(super) fn left_branch_checked(&mut self, intensity: f64) -> bool {
-        if self.left_branch() {
+        let length = self.prob.plan.length;
+        if left_branch(&self.path, &self.it.x, self.out.tip, length) {
             return true;
         }
-        let step = max_abs_diff(&self.x, &self.x_start);
-        let moved = (self.tip - self.tip_start).norm() / self.plan.length;
+        let step = max_abs_diff(&self.it.x, &self.path.x_start);
+        let moved = (self.out.tip - self.path.tip_start).norm() / self.prob.plan.length;
         self.guarded()
             && intensity > CERTIFY_INTENSITY
             && (step > WARM_CHECK_STEP || moved > WARM_CHECK_STEP)
@@ -111,35 +98,36 @@ impl Workspace {
         let mut iterations = 0;
         let mut steps = 0;
         self.cold_guess(0.0);
-        self.lu_valid = false;
-        self.x_ok.copy_from_slice(&self.x);
-        self.x_prev.copy_from_slice(&self.x);
+        self.jac.lu_valid = false;
+        self.path.x_ok.copy_from_slice(&self.it.x);
+        self.path.x_prev.copy_from_slice(&self.it.x);
         let mut lam_prev: f64 = 0.0;
-        let per_step = self.settings.max_iterations.min(CONTINUATION_BUDGET);
-        while steps < self.settings.max_continuation_steps {
+        let per_step = self.prob.settings.max_iterations.min(CONTINUATION_BUDGET);
+        while steps < self.prob.settings.max_continuation_steps {
             let target = (lam + step).min(1.0);
             if lam > lam_prev {
                 let k = (target - lam) / (lam - lam_prev);
-                for i in 0..self.x.len() {
-                    self.x[i] = self.x_ok[i] + k * (self.x_ok[i] - self.x_prev[i]);
+                for i in 0..self.it.x.len() {
+                    self.it.x[i] =
+                        self.path.x_ok[i] + k * (self.path.x_ok[i] - self.path.x_prev[i]);
                 }
             }
             let (st, it) = self.newton(target, per_step);
             iterations += it;
             steps += 1;
             if st.is_converged() {
-                self.x_prev.copy_from_slice(&self.x_ok);
+                self.path.x_prev.copy_from_slice(&self.path.x_ok);
                 lam_prev = lam;
                 lam = target;
-                self.x_ok.copy_from_slice(&self.x);
+                self.path.x_ok.copy_from_slice(&self.it.x);
                 if lam >= 1.0 {
-                    return (self.status_here(st), iterations, steps);
+                    return (self.it.status(st), iterations, steps);
                 }
                 if it <= 4 {
                     step *= 2.0;
                 }
             } else {
-                self.x.copy_from_slice(&self.x_ok);
+                self.it.x.copy_from_slice(&self.path.x_ok);
                 step *= 0.5;
                 if step < 1e-4 {
                     self.eval_at(false, 1.0);
@@ -147,8 +135,8 @@ impl Workspace {
                 }
             }
         }
-        self.x.copy_from_slice(&self.x_ok);
-        let (st, it) = self.newton(1.0, self.settings.max_iterations);
+        self.it.x.copy_from_slice(&self.path.x_ok);
+        let (st, it) = self.newton(1.0, self.prob.settings.max_iterations);
         (st, iterations + it, steps)
     }
 
@@ -168,7 +156,7 @@ impl Workspace {
         let max_step = (CERTIFY_STEP / self.load_intensity()).min(1.0);
         let mut step = max_step.min(0.25);
         let (mut lam, mut iterations, mut steps) = (0.0f64, 0, 0);
-        let per_step = self.settings.max_iterations.min(CONTINUATION_BUDGET);
+        let per_step = self.prob.settings.max_iterations.min(CONTINUATION_BUDGET);
         self.cold_guess(0.0);
         let sign0 = match self.tangent(0.0) {
             Ok(sign) => sign,
@@ -176,14 +164,14 @@ impl Workspace {
             // status is read: `Workspace::solve`)
             Err(st) => return (st, 0, 0),
         };
-        self.x_ok.copy_from_slice(&self.x);
-        self.x_prev.copy_from_slice(&self.x_tan);
+        self.path.x_ok.copy_from_slice(&self.it.x);
+        self.path.x_prev.copy_from_slice(&self.path.x_tan);
         let mut last = SolveStatus::MaxIterations;
-        while steps < self.settings.max_continuation_steps {
+        while steps < self.prob.settings.max_continuation_steps {
             let target = (lam + step).min(1.0);
             let h = target - lam;
-            for i in 0..self.x.len() {
-                self.x[i] = self.x_ok[i] + h * self.x_prev[i];
+            for i in 0..self.it.x.len() {
+                self.it.x[i] = self.path.x_ok[i] + h * self.path.x_prev[i];
             }
             let (st, it) = self.newton(target, per_step);
             iterations += it;
@@ -191,7 +179,8 @@ impl Workspace {
             // corrector move over predictor move: O(h) on a smooth branch, O(1) after a
             // jump to another one
             let ratio = if st.is_converged() {
-                self.corrector_ratio(h)
+                let length = self.prob.plan.length;
+                corrector_ratio(&self.path, &self.it.x, self.out.tip, h, length)
             } else {
                 f64::INFINITY
             };
@@ -200,8 +189,8 @@ impl Workspace {
             let grow = STEP_RULE.growth(ratio, 1.0);
             if accept {
                 lam = target;
-                self.x_ok.copy_from_slice(&self.x);
-                self.x_prev.copy_from_slice(&self.x_tan);
+                self.path.x_ok.copy_from_slice(&self.it.x);
+                self.path.x_prev.copy_from_slice(&self.path.x_tan);
                 if lam >= 1.0 {
                     // the tangent's passes re-settled the chords from another start
                     // (residual 1.3e-12 against 1.0e-12 seen by the fuzzer): confirm
@@ -216,20 +205,20 @@ impl Workspace {
             } else {
                 st
             };
-            self.x.copy_from_slice(&self.x_ok);
-            self.lu_valid = false;
+            self.it.x.copy_from_slice(&self.path.x_ok);
+            self.jac.lu_valid = false;
             step = h * StepRule::after_rejection(grow);
             if step < 1e-4 {
                 break;
             }
         }
-        self.x.copy_from_slice(&self.x_ok);
+        self.it.x.copy_from_slice(&self.path.x_ok);
         self.eval_at(false, 1.0);
         // a branch verdict: the guard could not follow the branch to full load, so no
         // state of this solve counts as on it, whatever its residual (the partial-load
         // point evaluated at full load, or the best full-load iterate)
-        self.best_res = f64::INFINITY;
-        self.branch_verdict = true;
+        self.it.best_res = f64::INFINITY;
+        self.it.verdict = true;
         let st = if step < 1e-4 {
             last
         } else {
@@ -238,66 +227,51 @@ impl Workspace {
         (st, iterations, steps)
     }
 
-    /// How far the corrector of a checked continuation step of size `h` (from `x_ok`
-    /// along the tangent in `x_prev`) moved, relative to the predictor's own move: the
-    /// larger of the ratios for the unknowns and for the tip.
-    pub(super) fn corrector_ratio(&self, h: f64) -> f64 {
-        let (mut dp, mut dc) = (0.0f64, 0.0f64);
-        for i in 0..self.x.len() {
-            let d = h * self.x_prev[i];
-            dp = dp.max(d.abs());
-            dc = dc.max((self.x[i] - self.x_ok[i] - d).abs());
-        }
-        let tip_pred = self.tip_ok + self.tip_tan * h;
-        let (tp, tc) = ((self.tip_tan * h).norm(), (self.tip - tip_pred).norm());
-        (dc / (dp + 1e-9)).max(tc / (tp + 1e-9 * self.plan.length))
-    }
-
     /// Tangent `dx/dlam = -J^-1 dr/dlam` of the equilibrium path at `x` (converged at
     /// load scale `lam`) into `x_tan`, and the sign of `det J`: a fresh exact Jacobian
     /// and a forward difference of the residual in `lam`. Leaves that Jacobian
     /// factorised for the next corrector.
     pub(super) fn tangent(&mut self, lam: f64) -> Result<f64, SolveStatus> {
-        let n = self.plan.n_unknowns;
-        self.jac_evals += 1;
+        let n = self.prob.plan.n_unknowns;
+        self.jac.evals += 1;
         if !self.eval_at(false, lam) || !self.jacobian(lam) {
             return Err(SolveStatus::NonFinite);
         }
-        match self.lu.factor() {
-            Some(rc) if rc > MIN_RCOND => self.lu_valid = true,
+        match self.jac.lu.factor() {
+            Some(rc) if rc > MIN_RCOND => self.jac.lu_valid = true,
             _ => return Err(SolveStatus::IllConditioned),
         }
-        self.dx.copy_from_slice(&self.res);
+        self.it.dx.copy_from_slice(&self.it.res);
         let eps = 1e-6;
         if !self.eval_at(false, lam + eps) {
             return Err(SolveStatus::NonFinite);
         }
         for i in 0..n {
-            self.x_tan[i] = -(self.res[i] - self.dx[i]) / eps;
+            self.path.x_tan[i] = -(self.it.res[i] - self.it.dx[i]) / eps;
         }
-        self.lu.solve_in_place(&mut self.x_tan);
+        self.jac.lu.solve_in_place(&mut self.path.x_tan);
         // the tip's tangent, by a pass from this point's settled chords
         if !self.eval_at(false, lam) {
             return Err(SolveStatus::NonFinite);
         }
-        self.tip_ok = self.tip;
+        self.path.tip_ok = self.out.tip;
         for i in 0..n {
-            self.x_trial[i] = self.x[i] + eps * self.x_tan[i];
+            self.it.x_trial[i] = self.it.x[i] + eps * self.path.x_tan[i];
         }
         if !self.eval_at(true, lam + eps) {
             return Err(SolveStatus::NonFinite);
         }
-        self.tip_tan = (self.tip - self.tip_ok) / eps;
+        self.path.tip_tan = (self.out.tip - self.path.tip_ok) / eps;
         // leave the pass state at `lam`
         self.eval_at(false, lam);
-        Ok(self.lu.det_sign())
+        Ok(self.jac.lu.det_sign())
     }
 
     /// Whether cold solves get the branch guard: world-fixed (dead) loads and no
     /// tensioned cable, where `n(0)` is in closed form and Jacobi's condition on
     /// `dm(s)/dm0` is the stability test of the clamped-free rod.
     pub(super) fn guarded(&self) -> bool {
-        self.settings.branch_guard && self.plan.closed_form
+        self.prob.settings.branch_guard && self.prob.plan.closed_form
     }
 
     /// Jacobi's condition at the current solution: the first arc length (m) where
@@ -307,19 +281,22 @@ impl Workspace {
     /// hole unknowns are held fixed in that sweep, so the test is not defined there:
     /// `None`.
     pub fn conjugate_point(&mut self) -> Option<f64> {
-        if self.multi_active {
-            return self.multi.conjugate_point(&self.plan, &self.b64.theta);
+        if self.multi.active {
+            return self
+                .multi
+                .solver
+                .conjugate_point(&self.prob.plan, &self.bufs.b64.theta);
         }
-        let n = self.plan.n_unknowns;
-        let (plan, x) = (&self.plan, &self.x);
+        let n = self.prob.plan.n_unknowns;
+        let (plan, x) = (&self.prob.plan, &self.it.x);
         let mut scratch_s = [0.0; 36];
         let jac_s = &mut scratch_s[..];
         if plan.condensed {
-            if self.last_pass != Some(1.0) || self.b64.x != *x {
+            if self.bufs.last_pass != Some(1.0) || self.bufs.b64.x != *x {
                 self.eval_at(false, 1.0);
             }
-            let (plan, x, b64) = (&self.plan, &self.x, &self.b64);
-            let b = &mut self.wide.as_mut()?.narrow;
+            let (plan, x, b64) = (&self.prob.plan, &self.it.x, &self.bufs.b64);
+            let b = &mut self.bufs.wide.as_mut()?.narrow;
             b.next.clone_from(&b64.next);
             b.watch = true;
             b.conjugate_at = None;
@@ -328,19 +305,48 @@ impl Workspace {
             return if ok { b.conjugate_at } else { None };
         }
         if n == 3 {
-            self.b3.watch = true;
-            self.b3.conjugate_at = None;
-            let ok = sweep::<3>(plan, x, 0, false, &mut self.b3, jac_s, &mut [], 1.0);
-            self.b3.watch = false;
-            ok.then_some(self.b3.conjugate_at).flatten()
+            self.bufs.b3.watch = true;
+            self.bufs.b3.conjugate_at = None;
+            let ok = sweep::<3>(plan, x, 0, false, &mut self.bufs.b3, jac_s, &mut [], 1.0);
+            self.bufs.b3.watch = false;
+            ok.then_some(self.bufs.b3.conjugate_at).flatten()
         } else if n == 6 {
-            self.b6.watch = true;
-            self.b6.conjugate_at = None;
-            let ok = sweep::<6>(plan, x, 0, false, &mut self.b6, jac_s, &mut [], 1.0);
-            self.b6.watch = false;
-            ok.then_some(self.b6.conjugate_at).flatten()
+            self.bufs.b6.watch = true;
+            self.bufs.b6.conjugate_at = None;
+            let ok = sweep::<6>(plan, x, 0, false, &mut self.bufs.b6, jac_s, &mut [], 1.0);
+            self.bufs.b6.watch = false;
+            ok.then_some(self.bufs.b6.conjugate_at).flatten()
         } else {
             None
         }
     }
+}
+
+/// A warm solve left its branch: after the first accepted step `d1` (`path`), Newton
+/// moved the unknowns to `x` (tip `tip`, rod length `length`) by more than
+/// `WARM_JUMP_RATIO |d1| + WARM_JUMP_FLOOR` (max norm).
+fn left_branch(path: &Path, x: &[f64], tip: Vector3<f64>, length: f64) -> bool {
+    if !path.first_taken {
+        return false;
+    }
+    let d1 = max_abs_diff(&path.x_first, &path.x_start);
+    let rest = max_abs_diff(x, &path.x_first);
+    let t1 = (path.tip_first - path.tip_start).norm() / length;
+    let trest = (tip - path.tip_first).norm() / length;
+    rest > WARM_JUMP_RATIO * d1 + WARM_JUMP_FLOOR || trest > WARM_JUMP_RATIO * t1 + WARM_JUMP_FLOOR
+}
+
+/// How far the corrector of a checked continuation step of size `h` (from `x_ok`
+/// along the tangent in `x_prev` of `path`) moved to `x` (tip `tip`), relative to the
+/// predictor's own move: the larger of the ratios for the unknowns and for the tip.
+fn corrector_ratio(path: &Path, x: &[f64], tip: Vector3<f64>, h: f64, length: f64) -> f64 {
+    let (mut dp, mut dc) = (0.0f64, 0.0f64);
+    for ((xi, ok), tan) in x.iter().zip(&path.x_ok).zip(&path.x_prev) {
+        let d = h * tan;
+        dp = dp.max(d.abs());
+        dc = dc.max((xi - ok - d).abs());
+    }
+    let tip_pred = path.tip_ok + path.tip_tan * h;
+    let (tp, tc) = ((path.tip_tan * h).norm(), (tip - tip_pred).norm());
+    (dc / (dp + 1e-9)).max(tc / (tp + 1e-9 * length))
 }

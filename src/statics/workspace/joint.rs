@@ -7,7 +7,7 @@
 //! it reads the workspace's private buffers without widening their visibility; it
 //! adds methods only and changes none of the forward solver.
 
-use super::{max_abs, sweep, SolveStatus, Wide, Workspace, ARC_SWEEP};
+use super::{max_abs, sweep, SolveStatus, Workspace, ARC_SWEEP};
 use crate::math::Dual;
 
 /// Cumulative integration counts of one workspace (all solves and sweeps so far).
@@ -40,36 +40,49 @@ impl Workspace {
     /// workspace's own iterate, factorisation and warm start are untouched. No
     /// allocation. `false` when a pass failed (non-finite state) or a slice is short.
     pub fn joint_jacobians(&mut self, x: &[f64], jac_s: &mut [f64], jac_m: &mut [f64]) -> bool {
-        let n = self.plan.n_unknowns;
-        let p = self.plan.params.len();
-        let c = self.plan.cables.len();
+        let n = self.prob.plan.n_unknowns;
+        let p = self.prob.plan.params.len();
+        let c = self.prob.plan.cables.len();
         let w = n + p;
         if x.len() != n || jac_s.len() < n * w || jac_m.len() < c * w {
             return false;
         }
-        self.jac_evals += 1;
-        if self.plan.condensed {
+        self.jac.evals += 1;
+        if self.prob.plan.condensed {
             return self.joint_condensed(x, w, jac_s, jac_m);
         }
         let ok = if w <= 3 {
-            sweep::<3>(&self.plan, x, 0, true, &mut self.b3, jac_s, jac_m, 1.0)
-        } else if let Some(b) = self.b_arc.as_mut().filter(|_| w > 6 && w <= ARC_SWEEP) {
-            let ok = sweep(&self.plan, x, 0, true, b, jac_s, jac_m, 1.0);
+            sweep::<3>(
+                &self.prob.plan,
+                x,
+                0,
+                true,
+                &mut self.bufs.b3,
+                jac_s,
+                jac_m,
+                1.0,
+            )
+        } else if let Some(b) = self.bufs.b_arc.as_mut().filter(|_| w > 6 && w <= ARC_SWEEP) {
+            let ok = sweep(&self.prob.plan, x, 0, true, b, jac_s, jac_m, 1.0);
             for k in 0..p {
-                b.theta[k] = Dual::constant(self.b64.theta[k]);
+                b.theta[k] = Dual::constant(self.bufs.b64.theta[k]);
             }
             ok
         } else {
-            (0..w)
-                .step_by(6)
-                .all(|c0| sweep::<6>(&self.plan, x, c0, true, &mut self.b6, jac_s, jac_m, 1.0))
+            (0..w).step_by(6).all(|c0| {
+                sweep::<6>(
+                    &self.prob.plan,
+                    x,
+                    c0,
+                    true,
+                    &mut self.bufs.b6,
+                    jac_s,
+                    jac_m,
+                    1.0,
+                )
+            })
         };
-        // theta back to constants (the sweep seeded it)
-        for k in 0..p {
-            let v = self.b64.theta[k];
-            self.b3.theta[k] = Dual::constant(v);
-            self.b6.theta[k] = Dual::constant(v);
-        }
+        self.bufs.unseed_theta(p);
         ok
     }
 
@@ -84,18 +97,19 @@ impl Workspace {
     ) -> bool {
         // the next holes must be settled at `x` and the current theta: skip the pass
         // when the last one was exactly that (e.g. right after `adopt_unknowns`)
-        if self.last_pass != Some(1.0) || self.b64.x != x {
-            self.x_trial.copy_from_slice(x);
+        if self.bufs.last_pass != Some(1.0) || self.bufs.b64.x != x {
+            self.it.x_trial.copy_from_slice(x);
             if !self.eval_trial(1.0) {
                 return false;
             }
         }
-        let (plan, b64) = (&self.plan, &mut self.b64);
+        let (plan, b64) = (&self.prob.plan, &mut self.bufs.b64);
         let ok = self
+            .bufs
             .wide
             .as_mut()
             .is_some_and(|b| b.sweeps(plan, x, w, true, b64, jac_s, jac_m, 1.0));
-        if x != self.x.as_slice() {
+        if x != self.it.x.as_slice() {
             self.eval_at(false, 1.0);
         }
         ok
@@ -111,42 +125,41 @@ impl Workspace {
     /// first-order predictor of [`Workspace::set_theta_predicted`] is invalidated.
     /// No allocation.
     pub fn adopt_unknowns(&mut self, x: &[f64], evaluate: bool) -> f64 {
-        if x.len() != self.x.len() {
+        if x.len() != self.it.x.len() {
             return f64::INFINITY;
         }
-        self.x.copy_from_slice(x);
-        self.dxdtheta_valid = false;
-        self.noise.forget();
+        self.it.x.copy_from_slice(x);
+        self.sens.dxdtheta_valid = false;
+        self.it.noise.forget();
         let res = if evaluate {
             if self.eval_at(false, 1.0) {
-                max_abs(&self.res)
+                max_abs(&self.it.res)
             } else {
                 f64::INFINITY
             }
         } else {
-            self.res.copy_from_slice(&self.b64.res);
-            max_abs(&self.res)
+            self.it.res.copy_from_slice(&self.bufs.b64.res);
+            max_abs(&self.it.res)
         };
         // a finite point is a usable warm start even if it is not an equilibrium;
         // the report describes the adopted point (MaxIterations: "best iterate, see
         // `residual`", the closest status for an externally iterated point)
-        self.has_solution = res.is_finite();
-        self.tol = self.settings.tolerance.max(self.residual_floor());
-        self.report.status = super::status_of(res, self.tol, SolveStatus::MaxIterations);
-        self.report.residual = res;
-        self.report.tolerance = self.tol;
+        self.out.has_solution = res.is_finite();
+        self.it.tol = self.prob.settings.tolerance.max(self.residual_floor());
+        // (a branch verdict belonged to the last solve's state, not to this one)
+        self.it.verdict = false;
+        self.out.report.status = self.it.status(SolveStatus::MaxIterations);
+        self.out.report.residual = res;
+        self.out.report.tolerance = self.it.tol;
         res
     }
 
     /// Cumulative integration counts of this workspace (for method comparisons).
     pub fn rhs_counts(&self) -> RhsCounts {
         RhsCounts {
-            f64_rhs: self.b64.rhs_evals,
-            dual_rhs: self.b3.rhs_evals
-                + self.b6.rhs_evals
-                + self.wide.as_ref().map_or(0, Wide::rhs_evals)
-                + self.b_arc.as_ref().map_or(0, |b| b.rhs_evals),
-            local_iterations: self.b64.retries,
+            f64_rhs: self.bufs.b64.rhs_evals,
+            dual_rhs: self.bufs.dual_rhs(),
+            local_iterations: self.bufs.b64.retries,
         }
     }
 }

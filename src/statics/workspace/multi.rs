@@ -29,22 +29,22 @@ const MULTI_FALLBACK: f64 = 5.0;
 
 impl Workspace {
     fn multi_allowed(&self, intensity: f64) -> bool {
-        self.multi_supported && intensity <= MULTI_MAX_INTENSITY
+        self.prob.multi_supported && intensity <= MULTI_MAX_INTENSITY
     }
 
     /// Multiple shooting instead of single shooting for this solve (module docs), or
     /// `None`.
     pub(super) fn multi_first(&mut self, start: Start, intensity: f64) -> Option<SolveReport> {
         if !self.multi_allowed(intensity) {
-            self.multi_active = false;
+            self.multi.active = false;
             return None;
         }
         let large = intensity > MULTI_INTENSITY;
-        let warm = start == Start::Warm && self.multi_active && self.multi.has_solution();
-        let warm_single = start == Start::Warm && !self.multi_active && self.has_solution;
-        let cold = !warm && !warm_single && self.settings.continuation && large;
+        let warm = start == Start::Warm && self.multi.active && self.multi.solver.has_solution();
+        let warm_single = start == Start::Warm && !self.multi.active && self.out.has_solution;
+        let cold = !warm && !warm_single && self.prob.settings.continuation && large;
         if !((warm && large) || cold) {
-            self.multi_active = false;
+            self.multi.active = false;
             return None;
         }
         Some(self.run_multi(warm, intensity))
@@ -62,9 +62,9 @@ impl Workspace {
         // status stands (near the tension fold, `T r L/EI` ~ 7.9-8.3, a solve on
         // multiple shooting's finer steps lands 0.1 mm from single shooting's branch
         // point, which `tests/stability.rs` tracks at 1 um)
-        let tensioned = self.plan.cables.iter().any(|c| c.tensioned);
+        let tensioned = self.prob.plan.cables.iter().any(|c| c.tensioned);
         if status.is_converged()
-            || !self.settings.continuation
+            || !self.prob.settings.continuation
             || intensity <= MULTI_FALLBACK
             || (tensioned && intensity <= MULTI_INTENSITY)
             || !self.multi_allowed(intensity)
@@ -75,41 +75,41 @@ impl Workspace {
         if rep.status.is_converged() {
             Some(rep)
         } else {
-            self.multi_active = false;
+            self.multi.active = false;
             None
         }
     }
 
     fn run_multi(&mut self, warm: bool, intensity: f64) -> SolveReport {
         let args = MultiArgs {
-            plan: &self.plan,
-            theta: &self.b64.theta,
+            plan: &self.prob.plan,
+            theta: &self.bufs.b64.theta,
             intensity,
-            tol: self.tol,
-            max_iterations: self.settings.max_iterations,
-            max_continuation_steps: self.settings.max_continuation_steps,
+            tol: self.it.tol,
+            max_iterations: self.prob.settings.max_iterations,
+            max_continuation_steps: self.prob.settings.max_continuation_steps,
             jacobi: self.guarded(),
         };
-        let rep = self.multi.solve(&args, warm);
-        self.multi_active = true;
+        let rep = self.multi.solver.solve(&args, warm);
+        self.multi.active = true;
         // the base wrench as single shooting's unknowns (a warm start if a later
         // solve goes back to it); a failed solve leaves single shooting's state alone
-        let (n0, m0) = self.multi.base_wrench();
-        let p = &self.plan;
+        let (n0, m0) = self.multi.solver.base_wrench();
+        let p = &self.prob.plan;
         let converged = rep.status.is_converged();
         if converged && p.closed_form {
             for i in 0..3 {
-                self.x[i] = m0[i] / p.moment_scale;
+                self.it.x[i] = m0[i] / p.moment_scale;
             }
-        } else if converged && self.x.len() >= 6 {
+        } else if converged && self.it.x.len() >= 6 {
             for i in 0..3 {
-                self.x[i] = n0[i] / p.force_scale;
-                self.x[3 + i] = m0[i] / p.moment_scale;
+                self.it.x[i] = n0[i] / p.force_scale;
+                self.it.x[3 + i] = m0[i] / p.moment_scale;
             }
         }
-        self.has_solution = rep.status.is_converged();
-        self.last_intensity = intensity;
-        self.report = rep;
+        self.out.has_solution = rep.status.is_converged();
+        self.path.last_intensity = intensity;
+        self.out.report = rep;
         rep
     }
 }

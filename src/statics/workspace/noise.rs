@@ -18,7 +18,7 @@
 //! difference is a measured lower bound of the noise, and the solve's tolerance becomes
 //! at least [`FLOOR_SAFETY`] times it (reported in `SolveReport::tolerance`): the
 //! definition "`Converged` exactly when a re-evaluation of the same state agrees" of
-//! `status_of`, with the noise measured instead of estimated. The arc and exact
+//! `Iterate::status`, with the noise measured instead of estimated. The arc and exact
 //! couplings' passes are functions of the unknowns alone and are not measured.
 
 use super::super::floor::FLOOR_SAFETY;

@@ -13,96 +13,75 @@ impl Workspace {
     /// the lengths into `lengths`. No allocation. `false` if the sweep failed or
     /// `J_x` is singular.
     pub fn length_sensitivities(&mut self, out: &mut [f64], lengths: &mut [f64]) -> bool {
-        let n = self.plan.n_unknowns;
-        let p = self.plan.params.len();
-        let c = self.plan.cables.len();
+        let n = self.prob.plan.n_unknowns;
+        let p = self.prob.plan.params.len();
+        let c = self.prob.plan.cables.len();
         let w = n + p;
-        self.jac_evals += 1;
-        let ok = if self.plan.condensed {
+        self.jac.evals += 1;
+        let ok = if self.prob.plan.condensed {
             self.condensed_sweeps(w, true, 1.0)
         } else if w <= 3 {
             sweep::<3>(
-                &self.plan,
-                &self.x,
+                &self.prob.plan,
+                &self.it.x,
                 0,
                 true,
-                &mut self.b3,
-                &mut self.sens_s,
-                &mut self.sens_m,
+                &mut self.bufs.b3,
+                &mut self.sens.dres,
+                &mut self.sens.dlen,
                 1.0,
             )
-        } else if let Some(b) = self.b_arc.as_mut().filter(|_| w > 6 && w <= ARC_SWEEP) {
+        } else if let Some(b) = self.bufs.b_arc.as_mut().filter(|_| w > 6 && w <= ARC_SWEEP) {
             let ok = sweep(
-                &self.plan,
-                &self.x,
+                &self.prob.plan,
+                &self.it.x,
                 0,
                 true,
                 b,
-                &mut self.sens_s,
-                &mut self.sens_m,
+                &mut self.sens.dres,
+                &mut self.sens.dlen,
                 1.0,
             );
             for k in 0..p {
-                b.theta[k] = Dual::constant(self.b64.theta[k]);
+                b.theta[k] = Dual::constant(self.bufs.b64.theta[k]);
             }
             ok
         } else {
             (0..w).step_by(6).all(|c0| {
                 sweep::<6>(
-                    &self.plan,
-                    &self.x,
+                    &self.prob.plan,
+                    &self.it.x,
                     c0,
                     true,
-                    &mut self.b6,
-                    &mut self.sens_s,
-                    &mut self.sens_m,
+                    &mut self.bufs.b6,
+                    &mut self.sens.dres,
+                    &mut self.sens.dlen,
                     1.0,
                 )
             })
         };
-        // theta back to constants
-        for k in 0..p {
-            let v = self.b64.theta[k];
-            self.b3.theta[k] = Dual::constant(v);
-            self.b6.theta[k] = Dual::constant(v);
-        }
+        self.bufs.unseed_theta(p);
         if !ok {
             return false;
         }
-        let a = self.lu.matrix_mut();
+        let a = self.jac.lu.matrix_mut();
         for r in 0..n {
-            a[r * n..(r + 1) * n].copy_from_slice(&self.sens_s[r * w..r * w + n]);
+            a[r * n..(r + 1) * n].copy_from_slice(&self.sens.dres[r * w..r * w + n]);
         }
-        match self.lu.factor() {
-            Some(rc) if rc > MIN_RCOND => self.lu_valid = true,
+        match self.jac.lu.factor() {
+            Some(rc) if rc > MIN_RCOND => self.jac.lu_valid = true,
             _ => {
-                self.lu_valid = false;
+                self.jac.lu_valid = false;
                 return false;
             }
         }
         for j in 0..c {
-            let len = cable_length(&self.plan, &self.b64, j);
+            let len = cable_length(&self.prob.plan, &self.bufs.b64, j);
             if let Some(l) = lengths.get_mut(j) {
                 *l = len;
             }
         }
-        for k in 0..p {
-            for r in 0..n {
-                self.sens_col[r] = self.sens_s[r * w + n + k];
-            }
-            self.lu.solve_in_place(&mut self.sens_col);
-            for r in 0..n {
-                self.dxdtheta[r * p + k] = -self.sens_col[r];
-            }
-            for j in 0..c {
-                let mut g = self.sens_m[j * w + n + k];
-                for r in 0..n {
-                    g -= self.sens_m[j * w + r] * self.sens_col[r];
-                }
-                out[j * p + k] = g;
-            }
-        }
-        self.dxdtheta_valid = true;
+        self.sens.eliminate(&self.jac.lu, n, p, c, out);
         true
     }
 }

@@ -36,26 +36,26 @@ impl Workspace {
     /// check that Newton went where its first (tangent) step pointed, else a checked
     /// cold solve.
     pub fn solve(&mut self, start: Start) -> SolveReport {
-        let rhs0 = self.rhs_count();
-        self.jac_evals = 0;
-        self.best_res = f64::INFINITY;
-        let mut warm = start == Start::Warm && self.has_solution;
+        let rhs0 = self.bufs.rhs_count();
+        self.jac.evals = 0;
+        self.it.best_res = f64::INFINITY;
+        let mut warm = start == Start::Warm && self.out.has_solution;
         // branch guard, warm: under loads outside Jacobi's test above the certify
         // intensity, a step of more than WARM_STEP_INTENSITY can land on another
         // equilibrium already in its first pass (the chords settle elsewhere), which no
         // check on the Newton path sees: such a step is solved as a checked cold solve
         let intensity = self.load_intensity();
-        self.tol = self.settings.tolerance.max(self.residual_floor());
-        self.noise.forget();
-        self.branch_verdict = false;
+        self.it.tol = self.prob.settings.tolerance.max(self.residual_floor());
+        self.it.noise.forget();
+        self.it.verdict = false;
         if let Some(rep) = self.multi_first(start, intensity) {
             return rep;
         }
         if warm
-            && self.settings.branch_guard
+            && self.prob.settings.branch_guard
             && !self.guarded()
             && intensity > CERTIFY_INTENSITY
-            && (intensity - self.last_intensity).abs() > WARM_STEP_INTENSITY
+            && (intensity - self.path.last_intensity).abs() > WARM_STEP_INTENSITY
         {
             warm = false;
         }
@@ -66,40 +66,40 @@ impl Workspace {
         // Not with load parameters: the estimators' inner solves keep their old paths
         // (with both on, tests/estimate_joint.rs's nested LM moved by 2.5e-7 relative
         // and an unobservable case changed status).
-        let plain = self.plan.params.is_empty();
+        let plain = self.prob.plan.params.is_empty();
         let predict = plain && !(self.guarded() && intensity > CERTIFY_INTENSITY);
-        let predicted = self.secant.start(
-            &mut self.x,
-            &mut self.holes_aux,
-            &self.loads,
-            &self.b64.theta,
+        let predicted = self.path.secant.start(
+            &mut self.it.x,
+            &mut self.path.holes_aux,
+            &self.prob.loads,
+            &self.bufs.b64.theta,
             warm && predict,
         );
         if predicted {
             crate::statics::pass::set_local_next(
-                &self.plan,
-                &mut self.b64,
-                &self.holes_aux,
-                &self.x,
+                &self.prob.plan,
+                &mut self.bufs.b64,
+                &self.path.holes_aux,
+                &self.it.x,
             );
         }
         if warm {
-            self.x_start.copy_from_slice(&self.x);
-            self.b64.local_tol = LOCAL_TOL;
-            self.use_broyden = plain;
-            (status, iterations) = self.newton(1.0, self.settings.max_iterations);
-            self.use_broyden = false;
+            self.path.x_start.copy_from_slice(&self.it.x);
+            self.bufs.b64.local_tol = LOCAL_TOL;
+            self.jac.use_broyden = plain;
+            (status, iterations) = self.newton(1.0, self.prob.settings.max_iterations);
+            self.jac.use_broyden = false;
             // branch guard, warm: a solve its tangent step did not describe may have
             // jumped to another equilibrium; answer as a cold (checked) solve would
             if status.is_converged()
-                && self.settings.branch_guard
+                && self.prob.settings.branch_guard
                 && self.left_branch_checked(intensity)
             {
                 cold = true;
-                self.best_res = f64::INFINITY;
+                self.it.best_res = f64::INFINITY;
             }
             // a failed warm start falls back like a failed cold one
-            cold |= !status.is_converged() && self.settings.continuation;
+            cold |= !status.is_converged() && self.prob.settings.continuation;
         }
         if cold {
             let (st, it, steps) = self.solve_cold();
@@ -107,17 +107,17 @@ impl Workspace {
             iterations += it;
             continuation_steps = steps;
         }
-        if !status.is_converged() && self.best_res < max_abs(&self.res) {
+        if !status.is_converged() && self.it.best_res < max_abs(&self.it.res) {
             // hand back the best full-load iterate, not a partial-load point
-            self.x.copy_from_slice(&self.x_best);
+            self.it.x.copy_from_slice(&self.it.x_best);
             self.eval_at(false, 1.0);
         }
-        if self.b64.local_tol > LOCAL_TOL {
+        if self.bufs.b64.local_tol > LOCAL_TOL {
             // a failed solve's last point was evaluated with a loose inner tolerance
-            self.b64.local_tol = LOCAL_TOL;
+            self.bufs.b64.local_tol = LOCAL_TOL;
             self.eval_at(false, 1.0);
         }
-        if matches!(self.last_pass, Some(lam) if lam != 1.0) {
+        if matches!(self.bufs.last_pass, Some(lam) if lam != 1.0) {
             // a path that stopped at a partial load (a continuation whose first
             // tangent failed) left that load's residual: a status is only ever read
             // from the full load's (the fuzzed RK4 rod of
@@ -125,65 +125,74 @@ impl Workspace {
             // was reported `Converged` at load 0, its residual exactly 0)
             self.eval_at(false, 1.0);
         }
-        // the status of the state handed back, decided like every other one, unless
-        // the branch guard gave its verdict on this solve
-        let status = if self.branch_verdict {
-            status
-        } else {
-            self.status_here(status)
-        };
+        // the status of the state handed back, decided like every other one (a branch
+        // verdict on this solve keeps its own)
+        let status = self.it.status(status);
         if let Some(rep) = self.multi_fallback(status, intensity) {
             return rep;
         }
-        self.has_solution = status.is_converged();
-        if self.has_solution {
-            crate::statics::pass::local_next(&self.plan, &self.b64, &mut self.holes_aux);
+        self.out.has_solution = status.is_converged();
+        if self.out.has_solution {
+            crate::statics::pass::local_next(
+                &self.prob.plan,
+                &self.bufs.b64,
+                &mut self.path.holes_aux,
+            );
         }
         // the point the predictor extrapolates from: the solution with one more
         // chord step, no pass (`predict.rs`, "refined solutions")
-        self.x_trial.copy_from_slice(&self.x);
-        if self.has_solution
+        self.it.x_trial.copy_from_slice(&self.it.x);
+        if self.out.has_solution
             && predict
-            && self.lu_valid
-            && max_abs(&self.res) > REFINE_FROM * self.tol
+            && self.jac.lu_valid
+            && max_abs(&self.it.res) > REFINE_FROM * self.it.tol
         {
-            self.broyden.sync(&self.lu);
-            self.broyden.step(&self.res, &mut self.dx);
-            if self.dx.iter().all(|d| d.abs() <= REFINE_MAX_STEP) {
-                for (x, d) in self.x_trial.iter_mut().zip(&self.dx) {
+            self.jac.inverse_step(&self.it.res, &mut self.it.dx);
+            if self.it.dx.iter().all(|d| d.abs() <= REFINE_MAX_STEP) {
+                for (x, d) in self.it.x_trial.iter_mut().zip(&self.it.dx) {
                     *x += d;
                 }
-                let (plan, b64) = (&self.plan, &self.b64);
-                crate::statics::pass::refine_local_next(plan, b64, &self.dx, &mut self.holes_aux);
+                let (plan, b64) = (&self.prob.plan, &self.bufs.b64);
+                crate::statics::pass::refine_local_next(
+                    plan,
+                    b64,
+                    &self.it.dx,
+                    &mut self.path.holes_aux,
+                );
             }
         }
-        self.secant.finish(
-            self.has_solution,
-            &self.x,
-            &self.x_trial,
-            &self.holes_aux,
-            &self.loads,
-            &self.b64.theta,
+        self.path.secant.finish(
+            self.out.has_solution,
+            &self.it.x,
+            &self.it.x_trial,
+            &self.path.holes_aux,
+            &self.prob.loads,
+            &self.bufs.b64.theta,
         );
-        self.last_intensity = intensity;
-        self.report = SolveReport {
+        self.path.last_intensity = intensity;
+        self.out.report = SolveReport {
             status,
             iterations,
-            residual: max_abs(&self.res),
-            tolerance: self.tol,
-            rhs_evals: self.rhs_count() - rhs0,
-            jacobian_evals: self.jac_evals,
+            residual: max_abs(&self.it.res),
+            tolerance: self.it.tol,
+            rhs_evals: self.bufs.rhs_count() - rhs0,
+            jacobian_evals: self.jac.evals,
             continuation_steps,
-            unknowns: self.plan.n_unknowns,
+            unknowns: self.prob.plan.n_unknowns,
         };
-        self.report
+        self.out.report
     }
 
     /// Non-dimensional intensity of the current loads and load parameters (the sum of
     /// the bending angles each would cause alone: `P s^2/EI`, `M s/EI`, `T r s/EI`,
     /// weights like forces; see the `intensity` module).
     pub fn load_intensity(&self) -> f64 {
-        load_intensity(&self.robot, &self.loads, &self.plan.params, &self.b64.theta)
+        load_intensity(
+            &self.prob.robot,
+            &self.prob.loads,
+            &self.prob.plan.params,
+            &self.bufs.b64.theta,
+        )
     }
 
     /// Round-off floor of the scaled residual for the current loads and load
@@ -191,26 +200,13 @@ impl Workspace {
     pub fn residual_floor(&self) -> f64 {
         let intensity = self.load_intensity();
         residual_floor(
-            &self.robot,
-            &self.loads,
-            &self.settings,
-            &self.plan.cables,
-            &self.plan.params,
-            &self.b64.theta,
+            &self.prob.robot,
+            &self.prob.loads,
+            &self.prob.settings,
+            &self.prob.plan.cables,
+            &self.prob.plan.params,
+            &self.bufs.b64.theta,
             intensity,
         )
-    }
-
-    /// [`status_of`] the current state (`res`) with this solve's tolerance.
-    pub(super) fn status_here(&self, stop: SolveStatus) -> SolveStatus {
-        status_of(max_abs(&self.res), self.tol, stop)
-    }
-
-    pub(super) fn rhs_count(&self) -> u64 {
-        self.b64.rhs_evals
-            + self.b3.rhs_evals
-            + self.b6.rhs_evals
-            + self.wide.as_ref().map_or(0, Wide::rhs_evals)
-            + self.b_arc.as_ref().map_or(0, |b| b.rhs_evals)
     }
 }
