@@ -2,10 +2,12 @@
 //! model's tips at consecutive val rows, each tick warm from the previous tick's
 //! readings, the rows walked forward then backward as `benches/ik.rs` walks them
 //! (PASSES walks; the first tick, from zero readings, is not counted). Prints per-call time percentiles and
-//! what a tick costs (iterations = Jacobians, forward solves, QP solves), and the
-//! slowest calls with their status.
+//! what a tick costs (iterations = Jacobians, forward solves, QP solves), the
+//! forward solves' passes per call (deterministic, unlike the times), the
+//! co-contraction the readings drift into (their sum, the largest tension), and
+//! the slowest calls with their status.
 //!
-//! `cargo run --release --example ik_tick_profile [PASSES]`
+//! `cargo run --release --example ik_tick_profile [PASSES] [MAX_SOLVE_PASSES]`
 use cablesense::command::{IkSettings, IkTarget, IkWorkspace};
 use cablesense::Scene;
 use std::time::Instant;
@@ -16,6 +18,10 @@ fn pct(v: &[f64], f: f64) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let passes: usize = std::env::args().nth(1).map_or(Ok(2), |s| s.parse())?;
+    let mut settings = IkSettings::default();
+    if let Some(b) = std::env::args().nth(2) {
+        settings.max_solve_passes = Some(b.parse()?);
+    }
     let scene = Scene::load("data/calibration/ftdcr_v4_calibrated.toml")?;
     let mut tw = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&tw);
@@ -28,8 +34,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    let mut ik = IkWorkspace::from_scene(&scene, IkSettings::default())?;
+    let mut ik = IkWorkspace::from_scene(&scene, settings)?;
     let (mut times, mut its, mut jacs, mut fs, mut qps) = (Vec::new(), 0, 0, 0, 0);
+    let (mut call_passes, mut peak, mut sums, mut t_max) = (Vec::new(), 0, Vec::new(), 0.0f64);
+    let mut far = 0;
     let mut slow = Vec::new();
     let mut statuses = std::collections::BTreeMap::new();
     let n = targets.len();
@@ -46,6 +54,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 jacs += r.jacobians;
                 fs += r.forward_solves;
                 qps += r.qp_solves;
+                call_passes.push(r.passes as f64);
+                peak = peak.max(r.peak_passes);
+                sums.push(ik.readings().iter().sum::<f64>() * 1e3);
+                let tw = ik.tendon_workspace();
+                t_max = tw.tensions().iter().fold(t_max, |m, t| m.max(*t));
+                far += usize::from(r.distance_m > 5e-4);
                 *statuses.entry(r.status.name()).or_insert(0) += 1;
             }
             if dt > 10.0 {
@@ -70,6 +84,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         jacs as f64 / n,
         fs as f64 / n,
         qps as f64 / n
+    );
+    call_passes.sort_by(f64::total_cmp);
+    sums.sort_by(f64::total_cmp);
+    println!(
+        "passes per call: p50 {}, p99 {}, max {}; most in one forward solve {peak}; {far} calls ended > 0.5 mm away",
+        pct(&call_passes, 0.5),
+        pct(&call_passes, 0.99),
+        call_passes[call_passes.len() - 1]
+    );
+    println!(
+        "sum of the readings: p50 {:.2} mm, p99 {:.2}, max {:.2}; largest tension {t_max:.2} N",
+        pct(&sums, 0.5),
+        pct(&sums, 0.99),
+        sums[sums.len() - 1]
     );
     slow.sort_by(|a, b| b.2.total_cmp(&a.2));
     for (pass, k, dt, r) in slow.iter().take(12) {

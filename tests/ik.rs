@@ -12,6 +12,8 @@ use proptest::test_runner::FileFailurePersistence;
 
 #[path = "ik_boundary.rs"]
 mod boundary;
+#[path = "ik_budget.rs"]
+mod budget;
 
 const FTDCR: &str = "data/calibration/ftdcr_v4_calibrated.toml";
 const DARU: &str = "data/calibration/daru_calibrated.toml";

@@ -339,7 +339,7 @@ impl TendonWorkspace {
         // reach takes this path too, with what is left of the budget (`budget`
         // module docs: a row cut short is rolled back, and the rows after it
         // then start a step farther away).
-        let from_ref = start == Start::Cold || self.budget.limited;
+        let from_ref = start == Start::Cold || self.budget.steers();
         if from_ref && self.tendon_settings().joint_newton && !self.tendons.x_ref.is_empty() {
             if start == Start::Warm {
                 self.budget_second_chance();

@@ -83,6 +83,8 @@ impl IkWorkspace {
             iterations,
             jacobians: n.jacobians,
             forward_solves: solves,
+            passes: n.passes,
+            peak_passes: n.peak_passes,
             qp_solves,
             qp_fallbacks: n.qp_fallbacks,
             objective: st.objective,

@@ -35,7 +35,11 @@ impl IkWorkspace {
                     .take()
                     .unwrap_or(super::ENGAGE_FRACTION * delta);
                 match self.compute_jacobian() {
-                    Some(k) => n.solves += k,
+                    Some(k) => {
+                        n.solves += k;
+                        n.passes += self.fd_passes.0;
+                        n.peak_passes = n.peak_passes.max(self.fd_passes.1);
+                    }
                     None => return self.final_status(reached, false),
                 }
                 n.jacobians += 1;
@@ -94,11 +98,9 @@ impl IkWorkspace {
                     };
                     self.q_trial[i] = v.clamp(lo, hi);
                 }
-                n.solves += 1;
-                let converged = self
-                    .tw
-                    .solve_readings(&self.q_trial)
-                    .is_ok_and(|r| r.status.is_converged());
+                let rr = self.tw.solve_readings(&self.q_trial);
+                n.solve(rr.as_ref().map_or(0, |r| r.forward_solves));
+                let converged = rr.is_ok_and(|r| r.status.is_converged());
                 let (rho, phi_new) = if converged {
                     let tip = self.tw.tip_position();
                     let axis = self.tw.workspace().tip_axis();

@@ -13,6 +13,7 @@ impl IkWorkspace {
         if !self.has_state {
             return None;
         }
+        self.fd_passes = (0, 0);
         let ok = if !self.tw.workspace().robot().friction().is_frictionless() {
             return self.fd_jacobian();
         } else {
@@ -189,6 +190,7 @@ impl IkWorkspace {
         self.q_lin.copy_from_slice(&self.q);
         let h = FD_STEP_M;
         let mut solves = 0;
+        self.fd_passes = (0, 0);
         for i in 0..p {
             let mut tips = [Vector3::zeros(); 2];
             let mut axes = [Vector3::zeros(); 2];
@@ -198,6 +200,8 @@ impl IkWorkspace {
                 self.q_trial[i] += sign * h;
                 solves += 1;
                 let r = self.tw.solve_readings(&self.q_trial).ok()?;
+                self.fd_passes.0 += r.forward_solves;
+                self.fd_passes.1 = self.fd_passes.1.max(r.forward_solves);
                 if !r.status.is_converged() {
                     self.restore_state();
                     return None;

@@ -134,6 +134,30 @@
 //! evaluations. On the FTDCR v4's warm ticks an evaluation (dual sweep, `F_z`
 //! factored, 18 tangent passes) costs about 3.4 forward solves.
 //!
+//! **Budget.** Every forward solve of a call runs under a pass budget,
+//! [`IkSettings::max_solve_passes`] (the tendon solve's `max_passes` with its
+//! cap-only policy, `TendonWorkspace::set_budget_cap_only`: the unbudgeted path,
+//! the warm joint path with its continuation then the nested fallback, cut where
+//! the budget runs out); a trial that runs out is a failed trial, the step shrinks
+//! as after any other. A call then costs at most [`IkSettings::max_forward_solves`]
+//! times that many passes besides its Jacobians ([`IkReport::passes`],
+//! [`IkReport::peak_passes`]). Why: over a long warm chain
+//! (`examples/ik_tick_profile.rs 20`: the FTDCR v4 val rows walked forward and back
+//! 20 times, 8 839 ticks, 25 673 forward solves) the readings, which the objectives
+//! pin only relative to the call's start, drift along the co-contraction (all
+//! tendons pulled together): at the same target their sum ranged 1.7-24.1 mm from
+//! one walk to another, the largest tension up to 13.5 N. There warm forward solves
+//! of 0.2-0.5 mm trial steps ran the joint path's continuation for up to 968 passes
+//! and then the nested fallback (51 solves of 129-973 passes, up to 80 shooting
+//! solves), 4 077 passes (4.8 s) in one call; the other 25 622 solves took at most
+//! 76 passes (p99 8, p99.9 22): 128, above that maximum, bounds the chain's
+//! solves and cuts those 51 (docs/command.md). It is not the default (the default
+//! is no budget, as before): 128 turns slow but reached ticks in the
+//! co-contraction into `budget_exhausted` ones (`tests/ik_budget.rs`: from row
+//! 170's co-contracted readings, 14 of 15 ticks, up to 18 mm away) and leaves a
+//! daru property case of `tests/ik.rs` (a 10 % start, trial steps of millimetres)
+//! 10.2 um away. The drift itself is not removed.
+//!
 //! **Outcomes** ([`IkStatus`]): `Reached` (tip within [`IkSettings::tolerance_m`], and
 //! the direction within [`IkSettings::angle_tolerance_rad`] when one is given);
 //! `Unreachable` only at a constrained stationary point with the tip still farther
@@ -277,6 +301,12 @@ pub struct IkWorkspace {
     jac_exact: bool,
     /// The last accepted step (m), for the Broyden update.
     step_m: Vec<f64>,
+    /// The scene's own `TendonSettings::max_passes` (the forward solves run with
+    /// the smaller of it and [`IkSettings::max_solve_passes`]).
+    scene_passes: Option<usize>,
+    /// Passes of the friction fallback's differences at the last Jacobian: the
+    /// sum and the most of one solve.
+    fd_passes: (usize, usize),
 }
 
 impl IkWorkspace {
@@ -290,7 +320,10 @@ impl IkWorkspace {
     ) -> Result<Self, ModelError> {
         settings.validate()?;
         limits.validate(tw.columns())?;
-        let tw = tw.without_rollback();
+        let mut tw = tw.without_rollback();
+        tw.set_budget_cap_only(true);
+        let scene_passes = tw.tendon_settings().max_passes;
+        Self::budget_solves(&mut tw, scene_passes, &settings)?;
         let p = tw.driven().len();
         let nx = tw.workspace().unknowns();
         let np = tw.workspace().params().len();
@@ -351,6 +384,8 @@ impl IkWorkspace {
             jac_valid: false,
             jac_exact: false,
             step_m: vec![0.0; p],
+            scene_passes,
+            fd_passes: (0, 0),
             tw,
         };
         let zero = vec![0.0; p];
@@ -389,7 +424,16 @@ impl IkWorkspace {
         }
         let mut r = self.tw.solve_readings(q)?;
         if !r.status.is_converged() {
-            r = self.tw.solve_readings_from(q, Start::Cold)?;
+            // a start the budgeted warm solve did not reach: cold, with the
+            // scene's own budget (its nested fallback included), since every
+            // call needs a converged start
+            let budgeted = *self.tw.tendon_settings();
+            let mut own = budgeted;
+            own.max_passes = self.scene_passes;
+            self.tw.set_tendon_settings(own)?;
+            let cold = self.tw.solve_readings_from(q, Start::Cold);
+            self.tw.set_tendon_settings(budgeted)?;
+            r = cold?;
         }
         if !r.status.is_converged() {
             self.has_state = false;
@@ -432,8 +476,25 @@ impl IkWorkspace {
     /// Replace the settings (checked; the ones in effect stay on error).
     pub fn set_settings(&mut self, s: IkSettings) -> Result<(), ModelError> {
         s.validate()?;
+        Self::budget_solves(&mut self.tw, self.scene_passes, &s)?;
         self.settings = s;
         Ok(())
+    }
+
+    /// The forward solves' pass budget: the smaller of the scene's
+    /// `max_passes` and [`IkSettings::max_solve_passes`] when either is set
+    /// (module docs, "Budget").
+    fn budget_solves(
+        tw: &mut TendonWorkspace,
+        scene_passes: Option<usize>,
+        s: &IkSettings,
+    ) -> Result<(), ModelError> {
+        let mut ts = *tw.tendon_settings();
+        ts.max_passes = match (scene_passes, s.max_solve_passes) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        tw.set_tendon_settings(ts)
     }
     /// `dp/dq` at the readings of the last Jacobian (3 x p row-major, m/m).
     pub fn tip_jacobian(&self) -> &[f64] {

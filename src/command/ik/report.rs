@@ -55,6 +55,14 @@ pub struct IkReport {
     pub jacobians: usize,
     /// Forward solves (trial steps, friction differences).
     pub forward_solves: usize,
+    /// Rod passes of those forward solves, summed
+    /// ([`TendonReport::forward_solves`](crate::tendons::TendonReport::forward_solves)
+    /// of each; the Jacobians' sweeps and tangent passes not included).
+    pub passes: usize,
+    /// The most passes one of those forward solves ran (at most
+    /// [`IkSettings::max_solve_passes`](super::IkSettings::max_solve_passes) when
+    /// set).
+    pub peak_passes: usize,
     /// Bounded least-squares steps solved.
     pub qp_solves: usize,
     /// Of those, the ones the allocation-free active-set method gave up on
@@ -71,12 +79,24 @@ pub struct IkReport {
     pub first_order: f64,
 }
 
-/// Work of one call: Gauss-Newton iterations (Jacobians), forward solves, QPs.
+/// Work of one call: Gauss-Newton iterations (Jacobians), forward solves and
+/// their passes, QPs.
 #[derive(Default)]
 pub(super) struct Counts {
     pub(super) iterations: usize,
     pub(super) jacobians: usize,
     pub(super) solves: usize,
+    pub(super) passes: usize,
+    pub(super) peak_passes: usize,
     pub(super) qp_solves: usize,
     pub(super) qp_fallbacks: usize,
+}
+
+impl Counts {
+    /// Count one forward solve that ran `passes` rod passes.
+    pub(super) fn solve(&mut self, passes: usize) {
+        self.solves += 1;
+        self.passes += passes;
+        self.peak_passes = self.peak_passes.max(passes);
+    }
 }

@@ -41,6 +41,16 @@ pub struct IkSettings {
     /// Forward (readings) solves per call, trial steps and the friction fallback's
     /// differences included (>= 1). Default 100.
     pub max_forward_solves: usize,
+    /// Rod passes per forward solve (`None`, or between 1 and 100000): each
+    /// forward solve of a call (trial steps, the friction fallback's differences)
+    /// runs with this [`TendonSettings::max_passes`](crate::TendonSettings::max_passes)
+    /// (`TendonReport::forward_solves`: the joint path's `f64` passes of the whole
+    /// rod, line-search trials included, and each nested shooting solve as one)
+    /// under the cap-only policy, so a call costs at most `max_forward_solves`
+    /// times this many passes besides its Jacobians. A trial that runs out is a
+    /// failed trial (the step shrinks). Default `None` (unbounded; module docs,
+    /// "Budget", for 128 measured on the FTDCR v4).
+    pub max_solve_passes: Option<usize>,
     /// Initial trust region: largest change of any reading in the first step (m, > 0).
     /// Default 0.002.
     pub trust_radius_m: f64,
@@ -63,6 +73,7 @@ impl Default for IkSettings {
             angle_tolerance_rad: 1e-3,
             max_iterations: 30,
             max_forward_solves: 100,
+            max_solve_passes: None,
             trust_radius_m: 0.002,
             step_tolerance_m: 1e-10,
             objective: IkObjective::Closest,
@@ -92,6 +103,13 @@ impl IkSettings {
                     why: "at least 1".into(),
                 });
             }
+        }
+        if let Some(m) = self.max_solve_passes.filter(|m| *m == 0 || *m > 100_000) {
+            return Err(ModelError::OutOfRange {
+                field: "ik.max_solve_passes".into(),
+                value: m as f64,
+                why: "between 1 and 100000".into(),
+            });
         }
         Ok(())
     }

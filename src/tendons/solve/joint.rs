@@ -402,7 +402,7 @@ impl TendonWorkspace {
 
     /// Restore the row's starting point for the nested method; `false`.
     fn joint_hand_back(&mut self) -> bool {
-        if self.budget.limited {
+        if self.budget.steers() {
             // no nested method under a budget: the cold path or the end of the call
             // follows (`budget` module), which sets its own point
             return false;
