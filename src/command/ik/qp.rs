@@ -291,9 +291,16 @@ mod tests {
         let diff: Vec<f64> = u_as.iter().zip(&u_cl).map(|(x, y)| x - y).collect();
         let dist = h_norm2(&k.h, &diff).max(0.0).sqrt();
         let scale = 1.0 + h_norm2(&k.h, &u_cl).max(0.0).sqrt();
-        if dist > tol * scale {
+        // Where the steps differ by more than `tol`, clarabel's own objective gap must
+        // account for it: with `u_as` optimal and `u_cl` feasible,
+        // `f(u_cl) - f(u_as) >= 0.5 |u_cl - u_as|_H^2` (first-order optimality of a
+        // convex QP), so a distance beyond that is the active set's error. (A case
+        // with p = 4, mu = 0.23 differs by 7.2e-5 relative with clarabel's objective
+        // the higher: clarabel's tolerance, not the active set's.)
+        let gap = (f_cl - f_as).max(0.0) + 1e-9 * (1.0 + f_cl.abs());
+        if dist > tol * scale && 0.5 * dist * dist > gap {
             return Err(format!(
-                "steps differ by {dist:.3e} (H norm, scale {scale:.3e}): {u_as:?} vs {u_cl:?}"
+                "steps differ by {dist:.3e} (H norm, scale {scale:.3e}; objective gap {gap:.3e}): {u_as:?} vs {u_cl:?}"
             ));
         }
         Ok(())
