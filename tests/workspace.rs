@@ -215,7 +215,7 @@ fn ftdcr_full_box_counts_failures_whatever_the_threads() {
     assert_eq!(stops, one.failed());
 }
 
-/// The retry pass (on by default) solves Halton sample 50 of the calibrated
+/// The retry pass (4 neighbours; off by default) solves Halton sample 50 of the calibrated
 /// FTDCR v4's shipped box, which the warm chain over the first 60 samples does not
 /// reach (its first solve stalls: the warm path and the path from reading 0 end
 /// at a fold), warm from one of its nearest solved samples; the first pass's
@@ -240,7 +240,7 @@ fn retry_pass_solves_a_sample_the_chain_does_not() {
         &limits,
         &WorkspaceSettings {
             check_retries: true,
-            ..settings(WorkspaceSettings::default().retry_neighbours)
+            ..settings(4)
         },
         &|_| {},
     )

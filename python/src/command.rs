@@ -520,12 +520,13 @@ impl IkSolver {
 }
 
 /// Status code of a workspace sample (`workspace()["status"]`): its index in
-/// `status_names`.
-const SAMPLE_STATUS: [SampleStatus; 4] = [
+/// `status_names` (a new status is appended, so that the codes stay).
+const SAMPLE_STATUS: [SampleStatus; 5] = [
     SampleStatus::Converged,
     SampleStatus::ConvergedStepped,
     SampleStatus::ConvergedCold,
     SampleStatus::Failed,
+    SampleStatus::ConvergedNeighbour,
 ];
 
 /// The reachable workspace of `scene`'s displacement-driven tendons within its
@@ -540,7 +541,7 @@ const SAMPLE_STATUS: [SampleStatus; 4] = [
 /// markers against. Returns {columns [p], limits (p, 2) m, readings (n, p) m, tips
 /// (n, 3) m (NaN for a sample that did not solve), markers (n, 3) m or None, status
 /// (n,) uint8 (index into status_names: converged, converged_stepped,
-/// converged_cold, failed), solved (n,) bool, solved_count, failed_count,
+/// converged_cold, failed, converged_neighbour), solved (n,) bool, solved_count, failed_count,
 /// sampling_s, hull_volume_m3 (the convex hull of the solved tips; None when it has
 /// no volume, hull_error says why), hull_vertices (v, 3) m, hull_triangles (t, 3)
 /// (indices into hull_vertices, counter-clockwise from outside)}. A convex hull

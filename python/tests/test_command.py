@@ -225,7 +225,13 @@ def test_workspace_returns_the_cloud_and_its_hull():
     assert ws["columns"] == ["l1", "l2", "l3"]
     assert ws["readings"].shape == (n, 3) and ws["tips"].shape == (n, 3)
     assert ws["status"].shape == (n,) and ws["status"].dtype == np.uint8
-    assert ws["status_names"] == ["converged", "converged_stepped", "converged_cold", "failed"]
+    assert ws["status_names"] == [
+        "converged",
+        "converged_stepped",
+        "converged_cold",
+        "failed",
+        "converged_neighbour",
+    ]
     assert np.array_equal(ws["solved"], ws["status"] != 3)
     assert ws["solved_count"] + ws["failed_count"] == n and ws["solved_count"] > 100
     # unsolved samples have NaN tips, solved ones finite

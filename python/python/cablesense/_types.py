@@ -203,7 +203,8 @@ class WorkspaceCloud(TypedDict):
     ``limits`` (p, 2) m; ``readings`` (n, p) m; ``tips`` (n, 3) m (NaN for a sample
     that did not solve); ``markers`` (n, 3) m, the ``marker_offset`` point of each
     sample (None without one); ``status`` (n,) uint8, an index into ``status_names``
-    (converged, converged_stepped, converged_cold, failed); ``solved`` (n,);
+    (converged, converged_stepped, converged_cold, failed,
+    converged_neighbour); ``solved`` (n,);
     ``solved_count``, ``failed_count``; ``sampling_s``; ``hull_volume_m3`` of the
     convex hull of the solved tips (None when it has no volume: ``hull_error``
     says why); ``hull_vertices`` (v, 3) m; ``hull_triangles`` (t, 3) indices into

@@ -164,11 +164,13 @@ impl Default for WorkspaceSettings {
 }
 
 impl WorkspaceSettings {
-    /// Default of [`WorkspaceSettings::retry_neighbours`]: 4 (on 2000 FTDCR v4
-    /// samples, with 40 passes a retry: 10 more solved at 2.1 times the rod
-    /// passes; 8 neighbours at 30 passes: 20 more at 2.8 times, and on 20,000
-    /// samples 120 s of CPU, past the 60 s on two cores; docs/command.md).
-    pub const DEFAULT_RETRY_NEIGHBOURS: usize = 4;
+    /// Default of [`WorkspaceSettings::retry_neighbours`]: 0, the retry pass off.
+    /// It buys little for its cost: on 20,000 FTDCR v4 samples, 4 neighbours at 40
+    /// passes a retry solved 163 more (68.9 % to 69.7 %) at 2.1 times the rod
+    /// passes, and a cold solve confirmed none of them (it stalls at the same
+    /// fold); 8 neighbours at 30 passes: 289 more at 2.7 times, 120 s of CPU, past
+    /// the 60 s on two cores (docs/command.md).
+    pub const DEFAULT_RETRY_NEIGHBOURS: usize = 0;
     /// Default of [`WorkspaceSettings::retry_passes`]: 40 (a converged FTDCR v4
     /// sample takes 24 on average; the rest of a failing retry's passes would go
     /// to the cold path from the reference, which stalls at the same fold).
