@@ -18,6 +18,20 @@ mod budget;
 const FTDCR: &str = "data/calibration/ftdcr_v4_calibrated.toml";
 const DARU: &str = "data/calibration/daru_calibrated.toml";
 
+/// The calibrated FTDCR v4 scene and the model's tips at its first `take` val rows
+/// ([`Scene::model_tips`]) as position targets.
+fn ftdcr_targets(take: usize) -> (Scene, Vec<IkTarget>) {
+    let scene = Scene::load(FTDCR).unwrap();
+    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
+    let targets = scene
+        .model_tips(&text, take)
+        .unwrap()
+        .into_iter()
+        .map(IkTarget::position)
+        .collect();
+    (scene, targets)
+}
+
 /// The recording's val rows' readings (m) and the model's tips there (m), solved in
 /// sequence (warm), rows that do not converge left out.
 fn val_rows(scene: &Scene, take: usize) -> Vec<(Vec<f64>, Vector3<f64>)> {

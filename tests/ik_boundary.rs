@@ -24,15 +24,7 @@ const ROW19_START_M: [f64; 9] = [
 ];
 
 fn scene_and_targets() -> (Scene, Vec<IkTarget>) {
-    let scene = Scene::load("data/calibration/ftdcr_v4_calibrated.toml").unwrap();
-    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
-    let targets = scene
-        .model_tips(&text, 20)
-        .unwrap()
-        .into_iter()
-        .map(IkTarget::position)
-        .collect();
-    (scene, targets)
+    super::ftdcr_targets(20)
 }
 
 /// Row 19 from the readings the warm chain reached it from: reached.

@@ -12,15 +12,22 @@ use cablesense::Scene;
 const BUDGET: usize = 128;
 
 fn setup() -> (Scene, Vec<IkTarget>) {
-    let scene = Scene::load("data/calibration/ftdcr_v4_calibrated.toml").unwrap();
-    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv").unwrap();
-    let targets = scene
-        .model_tips(&text, usize::MAX)
-        .unwrap()
-        .into_iter()
-        .map(IkTarget::position)
-        .collect();
-    (scene, targets)
+    super::ftdcr_targets(usize::MAX)
+}
+
+/// IK on `scene` with [`BUDGET`] passes a forward solve: the workspace, the budget
+/// and the call's `max_forward_solves`.
+fn budgeted(scene: &Scene) -> (IkWorkspace, usize, usize) {
+    let settings = IkSettings {
+        max_solve_passes: Some(BUDGET),
+        ..IkSettings::default()
+    };
+    let solves = settings.max_forward_solves;
+    (
+        IkWorkspace::from_scene(scene, settings).unwrap(),
+        BUDGET,
+        solves,
+    )
 }
 
 /// Val rows 171-185 warm from the co-contracted readings a 20-walk chain had
@@ -33,12 +40,7 @@ fn setup() -> (Scene, Vec<IkTarget>) {
 #[test]
 fn co_contracted_start_stays_within_budget() {
     let (scene, targets) = setup();
-    let settings = IkSettings {
-        max_solve_passes: Some(BUDGET),
-        ..IkSettings::default()
-    };
-    let (budget, solves) = (BUDGET, settings.max_forward_solves);
-    let mut ik = IkWorkspace::from_scene(&scene, settings).unwrap();
+    let (mut ik, budget, solves) = budgeted(&scene);
     let q_mm = [
         4.019590, 2.209607, 0.012514, 3.142521, 3.109778, 0.707683, 5.281516, 2.290426, 3.264487,
     ];
@@ -74,12 +76,7 @@ fn co_contracted_start_stays_within_budget() {
 #[test]
 fn long_warm_chain_stays_within_budget() {
     let (scene, targets) = setup();
-    let settings = IkSettings {
-        max_solve_passes: Some(BUDGET),
-        ..IkSettings::default()
-    };
-    let (budget, solves) = (BUDGET, settings.max_forward_solves);
-    let mut ik = IkWorkspace::from_scene(&scene, settings).unwrap();
+    let (mut ik, budget, solves) = budgeted(&scene);
     let n = targets.len();
     let (mut ticks, mut reached, mut peak, mut total) = (0, 0, 0usize, 0usize);
     let mut per_call = Vec::new();

@@ -188,11 +188,7 @@ fn readings_rung_by_label(robot: &cablesense::Robot, label: &str) -> anyhow::Res
         anyhow::anyhow!(
             "unknown --model `{label}` for readings: {}; use scene, auto or one of: {}",
             label_why(e),
-            ladder::readings_ladder(robot)
-                .iter()
-                .map(Rung::label)
-                .collect::<Vec<_>>()
-                .join(", ")
+            labels(&ladder::readings_ladder(robot))
         )
     })?;
     if let Rung::PiecewiseConstantCurvature(p) = &rung {
@@ -204,6 +200,11 @@ fn readings_rung_by_label(robot: &cablesense::Robot, label: &str) -> anyhow::Res
     }
     curvature_fits(robot, &rung)?;
     Ok(rung)
+}
+
+/// The rungs' labels, comma-separated (the error messages' lists).
+fn labels(rungs: &[Rung]) -> String {
+    rungs.iter().map(Rung::label).collect::<Vec<_>>().join(", ")
 }
 
 /// Why a label names no rung, without the list of spellings (the caller lists labels).
@@ -236,11 +237,7 @@ pub fn rung_by_label(robot: &cablesense::Robot, label: &str, extra: &str) -> any
             "unknown --model `{label}`: {}; use {extra} or a rung label, {}; the ladder of this robot: {}",
             label_why(e),
             ladder::LABEL_SPELLINGS,
-            ladder::full_ladder(robot)
-                .iter()
-                .map(Rung::label)
-                .collect::<Vec<_>>()
-                .join(", ")
+            labels(&ladder::full_ladder(robot))
         )
     })?;
     // not in this robot's ladder when a tendon is routed continuously: say why
