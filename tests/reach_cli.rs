@@ -98,7 +98,8 @@ fn reach_bad_targets_are_errors() {
 
 /// `reach --measured --recording FILE`: the recording's measured tips as targets (the scene's
 /// `[calibration]` columns), every row counted in the summary and the report, the
-/// readings file written; a scene without `[calibration]` is an error.
+/// forward error that of `track` (readings conditioned), the readings file written;
+/// a scene without `[calibration]` is an error.
 #[test]
 fn reach_measured_counts_every_row() {
     let d = tmp("measured");
@@ -123,9 +124,14 @@ fn reach_measured_counts_every_row() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
     assert!(err.contains(&format!("{rows} targets")), "{err}");
+    // the forward error is that of `track` on the same rows (the scene's time
+    // offset and backlash applied), as printed (3 decimals of a mm)
+    let scene = cablesense::Scene::load(SCENE).unwrap();
+    let track = cablesense::validation::track_errors(&scene, "rec.csv", &text).unwrap();
+    let printed = format!("RMSE {:.3},", track.errors.raw.rmse_m * 1e3);
     assert!(
-        err.contains("forward error at the recorded readings"),
-        "{err}"
+        err.contains("forward error at the recorded readings") && err.contains(&printed),
+        "{printed}: {err}"
     );
     let counts: usize = ["reached", "unreachable", "out of budget"]
         .iter()

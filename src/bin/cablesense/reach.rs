@@ -24,7 +24,8 @@
 //! targets (the scene's `[calibration]` columns, mapped to the base frame by its
 //! `capture_to_base`), each less the marker offset turned by the model's tip
 //! orientation at the row's recorded readings (the measured orientation is not
-//! recorded); without `--recording`, with the embedded scene, its val.csv. The model's
+//! recorded), those readings conditioned as `track` and `validate` condition them
+//! (the scene's `[readings]` time offset and backlash, row to row); without `--recording`, with the embedded scene, its val.csv. The model's
 //! error seen from the other side: how far the closest reachable tip lies from
 //! each measured one, beside the forward error at the recorded readings.
 //!
@@ -147,8 +148,10 @@ fn measured_targets(scene: &Scene, text: &str, file: &str) -> anyhow::Result<Mea
     })?;
     let frame = RigidTransform::from_spec(&cal.capture_to_base);
     let offset = Vector3::from(cal.marker_offset_m);
-    let mut tw = scene.tendon_workspace()?;
-    let mut parser = scene.readings_parser(&tw);
+    // the recorded readings as `track` and `validate` solve them: conditioned by the
+    // scene's `[readings]` time offset and backlash, warm from row to row
+    let mut chain = TrackChain::for_scene(scene, scene.tendon_workspace()?);
+    let mut parser = scene.readings_parser(chain.workspace());
     let mut out = Measured {
         targets: Vec::new(),
         forward_error_m: Vec::new(),
@@ -168,8 +171,11 @@ fn measured_targets(scene: &Scene, text: &str, file: &str) -> anyhow::Result<Mea
             );
         };
         let marker = frame.apply(&Vector3::from(m));
-        if tw.solve_readings(&row.readings_m)?.status.is_converged() {
-            let pose = *tw.workspace_mut().solution().tip();
+        let step = chain
+            .step_at(row.t_s, &row.readings_m)
+            .with_context(|| format!("{file}:{}: readings", i + 1))?;
+        if step.report.status.is_converged() {
+            let pose = *chain.workspace_mut().workspace_mut().solution().tip();
             rotation = pose.rotation;
             out.forward_error_m
                 .push((pose.position + pose.rotation * offset - marker).norm());
@@ -397,7 +403,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         f.sort_by(f64::total_cmp);
         let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
         eprintln!(
-            "measured tips of {file}: forward error at the recorded readings (mm) RMSE {:.3}, median {:.3}, max {:.3} ({} rows without a converged forward solve); reached distance RMS {:.3} mm",
+            "measured tips of {file}: forward error at the recorded readings, conditioned as `track` conditions them (mm): RMSE {:.3}, median {:.3}, max {:.3} ({} rows without a converged forward solve); reached distance RMS {:.3} mm",
             rms(&f) * 1e3,
             percentile(&f, 0.5) * 1e3,
             percentile(&f, 1.0) * 1e3,
