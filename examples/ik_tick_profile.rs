@@ -7,7 +7,12 @@
 //! co-contraction the readings drift into (their sum, the largest tension), and
 //! the slowest calls with their status.
 //!
-//! `cargo run --release --example ik_tick_profile [PASSES] [MAX_SOLVE_PASSES]`
+//! The drift along the redundancy: per target, the spread (max - min) over the
+//! walks of the readings' sum at that target.
+//!
+//! `cargo run --release --example ik_tick_profile [PASSES] [MAX_SOLVE_PASSES|-] [CSV] [REST_WEIGHT]`
+//! (CSV default `data/hardware/ftdcr_v4/val.csv`; REST_WEIGHT the
+//! `IkSettings::rest_weight`, default its default)
 use cablesense::command::{IkSettings, IkTarget, IkWorkspace};
 use cablesense::Scene;
 use std::time::Instant;
@@ -19,13 +24,19 @@ fn pct(v: &[f64], f: f64) -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let passes: usize = std::env::args().nth(1).map_or(Ok(2), |s| s.parse())?;
     let mut settings = IkSettings::default();
-    if let Some(b) = std::env::args().nth(2) {
+    if let Some(b) = std::env::args().nth(2).filter(|b| b != "-") {
         settings.max_solve_passes = Some(b.parse()?);
+    }
+    let csv = std::env::args()
+        .nth(3)
+        .unwrap_or_else(|| "data/hardware/ftdcr_v4/val.csv".into());
+    if let Some(w) = std::env::args().nth(4) {
+        settings.rest_weight = w.parse()?;
     }
     let scene = Scene::load("data/calibration/ftdcr_v4_calibrated.toml")?;
     let mut tw = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&tw);
-    let text = std::fs::read_to_string("data/hardware/ftdcr_v4/val.csv")?;
+    let text = std::fs::read_to_string(&csv)?;
     let mut targets = Vec::new();
     for (i, l) in text.lines().enumerate() {
         if let Ok(Some(r)) = parser.line(i + 1, l) {
@@ -41,6 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut slow = Vec::new();
     let mut statuses = std::collections::BTreeMap::new();
     let n = targets.len();
+    let mut spread = vec![(f64::INFINITY, f64::NEG_INFINITY); n];
     for pass in 0..passes {
         for j in 0..n - 1 {
             let k = if pass % 2 == 0 { j } else { n - 1 - j };
@@ -56,7 +68,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 qps += r.qp_solves;
                 call_passes.push(r.passes as f64);
                 peak = peak.max(r.peak_passes);
-                sums.push(ik.readings().iter().sum::<f64>() * 1e3);
+                let sum = ik.readings().iter().sum::<f64>() * 1e3;
+                sums.push(sum);
+                spread[k] = (spread[k].0.min(sum), spread[k].1.max(sum));
                 let tw = ik.tendon_workspace();
                 t_max = tw.tensions().iter().fold(t_max, |m, t| m.max(*t));
                 far += usize::from(r.distance_m > 5e-4);
@@ -66,6 +80,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 slow.push((pass, k, dt, r));
             }
         }
+        eprintln!(
+            "walk {pass}: {} calls, readings' sum now {:.2} mm",
+            times.len(),
+            ik.readings().iter().sum::<f64>() * 1e3
+        );
     }
     let n = times.len() as f64;
     times.sort_by(f64::total_cmp);
@@ -98,6 +117,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pct(&sums, 0.5),
         pct(&sums, 0.99),
         sums[sums.len() - 1]
+    );
+    let mut sp: Vec<f64> = spread
+        .iter()
+        .filter(|(a, b)| b >= a)
+        .map(|(a, b)| b - a)
+        .collect();
+    sp.sort_by(f64::total_cmp);
+    println!(
+        "spread of the readings' sum at one target over the walks: p50 {:.2} mm, p99 {:.2}, max {:.2}",
+        pct(&sp, 0.5),
+        pct(&sp, 0.99),
+        sp[sp.len() - 1]
     );
     slow.sort_by(|a, b| b.2.total_cmp(&a.2));
     for (pass, k, dt, r) in slow.iter().take(12) {

@@ -61,6 +61,12 @@ pub struct IkSettings {
     /// Weight `w` of the secondary objective (>= 0, dimensionless; module docs).
     /// Default 1e-6.
     pub secondary_weight: f64,
+    /// Weight `w_r` of the rest term `w_r |N q / 1 mm|^2` (>= 0, dimensionless,
+    /// `N` the projector on the tip Jacobian's null space), added to any
+    /// objective's step: readings drawn within the redundancy toward zero, a fixed
+    /// point, so that a long warm chain does not drift (module docs, "Rest term";
+    /// 0 turns it off). Default 1e-3.
+    pub rest_weight: f64,
     /// A direction error of 1 rad counts as this much position error (m, > 0).
     /// Default 0.01.
     pub direction_weight_m: f64,
@@ -78,6 +84,7 @@ impl Default for IkSettings {
             step_tolerance_m: 1e-10,
             objective: IkObjective::Closest,
             secondary_weight: 1e-6,
+            rest_weight: 1e-3,
             direction_weight_m: 0.01,
         }
     }
@@ -91,6 +98,7 @@ impl IkSettings {
         ModelError::positive("ik.trust_radius_m", self.trust_radius_m)?;
         ModelError::positive("ik.step_tolerance_m", self.step_tolerance_m)?;
         ModelError::non_negative("ik.secondary_weight", self.secondary_weight)?;
+        ModelError::non_negative("ik.rest_weight", self.rest_weight)?;
         ModelError::positive("ik.direction_weight_m", self.direction_weight_m)?;
         for (f, v) in [
             ("ik.max_iterations", self.max_iterations),

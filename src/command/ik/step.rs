@@ -2,7 +2,7 @@
 //! (mm), the first-order measure, the model's value of a step.
 
 use super::{IkObjective, IkTarget, IkWorkspace, DAMPING, LM_FACTOR, MM, ON_BOUND_M};
-use nalgebra::Vector3;
+use nalgebra::{Matrix6, Vector3, Vector6};
 
 impl IkWorkspace {
     /// `phi` in mm^2 at tip, axis, readings and tensions (module docs).
@@ -101,6 +101,24 @@ impl IkWorkspace {
                 }
             }
         }
+        let wr = self.settings.rest_weight;
+        if wr > 0.0 && self.null_space(target) {
+            // the rest term wr |N (q_lin + u)|^2 (mm), N the projector on the
+            // null space of the least-squares rows (module docs, "Rest term")
+            for a in 0..p {
+                let mut nq = 0.0;
+                for b in 0..p {
+                    let nab = self.null[a * p + b];
+                    self.h[a * p + b] += 2.0 * wr * nab;
+                    nq += nab * self.q_lin[b] * MM;
+                }
+                self.null_q[a] = nq;
+                self.g[a] += 2.0 * wr * nq;
+            }
+        } else {
+            self.null.fill(0.0);
+            self.null_q.fill(0.0);
+        }
         for i in 0..p {
             // from the linearisation point (an engaged tendon's engagement point)
             let hi = (self.limits.max_m[i].min(self.q_phys[i]) - self.q_lin[i]).min(delta);
@@ -148,17 +166,76 @@ impl IkWorkspace {
         n2.sqrt()
     }
 
-    /// Model value of the step `u` (mm^2): `0.5 u^T H u + g^T u`.
+    /// Model value of the step `u` (mm^2): `0.5 u^T H u + g^T u`, less the rest
+    /// term's part (`wr (u^T N u + 2 (N q_lin)^T u)`): the rest term steers the
+    /// step within the null space and is not part of the merit.
     pub(super) fn model(&self) -> f64 {
         let p = self.p;
+        let wr = self.settings.rest_weight;
         let mut v = 0.0;
         for a in 0..p {
-            let mut hu = 0.0;
+            let (mut hu, mut nu) = (0.0, 0.0);
             for b in 0..p {
                 hu += self.h[a * p + b] * self.u[b];
+                nu += self.null[a * p + b] * self.u[b];
             }
-            v += self.u[a] * (0.5 * hu + self.g[a]);
+            v += self.u[a] * (0.5 * hu + self.g[a]) - wr * self.u[a] * (nu + 2.0 * self.null_q[a]);
         }
         v
+    }
+
+    /// The projector `N = I - A^T (A A^T + eps I)^-1 A` on the null space of the
+    /// least-squares rows `A` (the tip's Jacobian, and the direction's scaled by
+    /// `l_d` when there is a direction target; mm/mm), into `self.null` (p x p).
+    /// `eps` = 1e-10 of the trace of `A A^T`. Rows and columns of slack tendons
+    /// (zero columns of `A`) are left out. False (and `N` unset) when the
+    /// Gram matrix cannot be factored (all rows zero).
+    fn null_space(&mut self, target: &IkTarget) -> bool {
+        let p = self.p;
+        let ld = self.settings.direction_weight_m;
+        let m = if target.direction.is_some() { 6 } else { 3 };
+        let row = |r: usize, a: usize| -> f64 {
+            if r < 3 {
+                self.jp[r * p + a]
+            } else {
+                ld * self.ja[(r - 3) * p + a]
+            }
+        };
+        let mut gram = Matrix6::<f64>::identity();
+        for r in 0..m {
+            for c in 0..m {
+                gram[(r, c)] = (0..p).map(|a| row(r, a) * row(c, a)).sum();
+            }
+        }
+        let eps = 1e-10 * (0..m).map(|r| gram[(r, r)]).sum::<f64>();
+        if eps <= 0.0 || !eps.is_finite() {
+            return false;
+        }
+        for r in 0..m {
+            gram[(r, r)] += eps;
+        }
+        let Some(chol) = gram.cholesky() else {
+            return false;
+        };
+        // Y = (A A^T + eps I)^-1 A, column by column; N = I - A^T Y
+        for b in 0..p {
+            let mut col = Vector6::<f64>::zeros();
+            for r in 0..m {
+                col[r] = row(r, b);
+            }
+            let y = chol.solve(&col);
+            for a in 0..p {
+                let ay: f64 = (0..m).map(|r| row(r, a) * y[r]).sum();
+                // a slack tendon's reading moves nothing: the rest term leaves it
+                // (pulling it toward zero would only engage it)
+                let both = !self.slack[a] && !self.slack[b];
+                self.null[a * p + b] = if both {
+                    f64::from(u8::from(a == b)) - ay
+                } else {
+                    0.0
+                };
+            }
+        }
+        true
     }
 }
