@@ -17,8 +17,9 @@
 //! taut tendons and the tensions at the last converged point; and
 //! three other paths (one section at a time, proximal first and distal first, and
 //! the pay-outs before the pulls). Last, the distal section's three tendons
-//! pulled together from reading 0 by steps of 0.1 mm: where that branch ends (the
-//! rod's buckling under its tendons' compression in the model). Timings depend on
+//! pulled together from reading 0 by steps of 0.1 mm: where that branch ends (not a
+//! fold nor the rod's buckling: the joint Jacobian turns singular in a mode the
+//! equal pull does not drive; `examples/workspace_fold.rs`, docs/command.md). Timings depend on
 //! the machine's load; the counts do not.
 
 use cablesense::command::workspace::{halton, nearest_neighbour_order};

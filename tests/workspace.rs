@@ -4,6 +4,9 @@
 //! bad inputs (no samples, limits excluding zero, missing limits) as errors naming
 //! the field.
 
+// The fold test of the failed samples.
+mod fold;
+
 use cablesense::command::workspace::radical_inverse;
 use cablesense::command::{sample_workspace, Hull, SampleStatus, WorkspaceSettings};
 use cablesense::nalgebra::Vector3;

@@ -40,6 +40,7 @@
 //! inextensible with given tensions; stretch, pretension and slack are what the
 //! position-controlled hardware adds (see `data/hardware/ftdcr_v4/`).
 
+pub mod fold;
 pub(crate) mod ift;
 mod scene;
 mod solve;
@@ -49,4 +50,5 @@ mod solve;
 pub use crate::robot::{
     capstan_factors, Actuation, FrictionLaw, FrictionSpec, RoutingSpec, TendonMechanics, TendonSpec,
 };
+pub use fold::{FoldPoint, FoldProbe};
 pub use solve::{TendonReport, TendonSettings, TendonWorkspace};

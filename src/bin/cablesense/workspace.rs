@@ -9,16 +9,18 @@
 //! embedded calibrated FTDCR v4 scene, its train recording and its val rows, written
 //! to `out/workspace/`.
 
+mod files;
+
 use crate::progress;
 use anyhow::{bail, Context};
 use cablesense::calibrate::{Recording, RigidTransform};
-use cablesense::command::{
-    sample_workspace, Hull, SampleStatus, WorkspaceCloud, WorkspaceSettings,
-};
+use cablesense::command::workspace::FoldClass;
+use cablesense::command::{sample_workspace, Hull, SampleStatus, WorkspaceSettings};
 use cablesense::files::svg::{Doc, Swatch};
 use cablesense::nalgebra::Vector3;
 use cablesense::validation::{column_map, TRAIN_CSV, VAL_CSV};
 use cablesense::Scene;
+use files::{stop_name, write_cloud, write_obj};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -85,6 +87,12 @@ pub struct Args {
     /// second equilibrium).
     #[arg(long)]
     check_retries: bool,
+    /// Test each failed sample for a fold of the warm path to it (small steps under
+    /// --retry-passes a solve, then the joint Jacobian's smallest singular value):
+    /// past_fold, singular, regular, reached (cloud.csv's fold_test column,
+    /// summary.json).
+    #[arg(long)]
+    fold_test: bool,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -157,6 +165,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         retry_cold: a.retry_cold,
         retry_passes: (a.retry_passes > 0).then_some(a.retry_passes),
         check_retries: a.check_retries,
+        fold_test: a.fold_test,
         marker_offset_m: marker_offset,
         ..WorkspaceSettings::default()
     };
@@ -182,7 +191,12 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     std::fs::create_dir_all(&a.output)
         .with_context(|| format!("creating {}", a.output.display()))?;
     let scale = scene.readings_scale_m();
-    write_cloud(&cloud, scale, &a.output.join("cloud.csv"))?;
+    write_cloud(
+        &cloud,
+        scale,
+        settings.fold_test,
+        &a.output.join("cloud.csv"),
+    )?;
     write_obj(&hull, &name, &a.output.join("hull.obj"))?;
     // where the work went: rod passes per status (deterministic, unlike times)
     let work = cloud.passes_by_status();
@@ -236,7 +250,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         "cold_retry": settings.cold_retry,
         "retry_neighbours": settings.retry_neighbours, "retry_steps": settings.retry_steps,
         "retry_cold": settings.retry_cold, "retry_passes": settings.retry_passes,
-        "check_retries": settings.check_retries,
+        "check_retries": settings.check_retries, "fold_test": settings.fold_test,
         "rod_passes": work_json,
         "hull_vertices": hull.vertices.len(),
         "hull_triangles": hull.triangles.len(),
@@ -274,6 +288,31 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         lines.push(format!(
             "retried samples (largest residual {retried_residual:.1e} m) checked by a cold solve at the same readings: {} the same tip (within {SAME_TIP_M:e} m), {} another tip (a second equilibrium), {} where the cold solve did not converge",
             checks.0, checks.1, checks.2
+        ));
+    }
+    if settings.fold_test {
+        let by_fold = cloud.failed_by_fold();
+        let names = FoldClass::ALL.map(FoldClass::name);
+        let json: serde_json::Map<String, serde_json::Value> = names
+            .iter()
+            .zip(&by_fold)
+            .map(|(n, (c, w))| {
+                (
+                    n.to_string(),
+                    serde_json::json!({ "samples": c, "passes": w }),
+                )
+            })
+            .collect();
+        summary["failed_by_fold_test"] = serde_json::Value::Object(json);
+        lines.push(format!(
+            "failed samples by the fold test (rod passes of the tests {}): {}",
+            by_fold.iter().map(|w| w.1).sum::<u64>(),
+            names
+                .iter()
+                .zip(&by_fold)
+                .map(|(n, (c, _))| format!("{n} {c}"))
+                .collect::<Vec<_>>()
+                .join(", ")
         ));
     }
     lines.push(work_line);
@@ -405,65 +444,6 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::from(1)
     })
-}
-
-/// A solve's status as in files (`stalled`, ...; `None`: readings rejected).
-fn stop_name(s: Option<cablesense::statics::SolveStatus>) -> String {
-    s.and_then(|s| serde_json::to_value(s).ok())
-        .and_then(|v| v.as_str().map(str::to_string))
-        .unwrap_or_else(|| "readings_rejected".into())
-}
-
-fn write_cloud(cloud: &WorkspaceCloud, scale: f64, path: &Path) -> anyhow::Result<()> {
-    let mut s = String::new();
-    let markers = !cloud.markers_m.is_empty();
-    writeln!(
-        s,
-        "sample,{},tip_x_m,tip_y_m,tip_z_m,{}last_solve,residual_m,retry_check_m,status,rod_passes",
-        cloud.columns.join(","),
-        if markers {
-            "marker_x_m,marker_y_m,marker_z_m,"
-        } else {
-            ""
-        }
-    )?;
-    for k in 0..cloud.len() {
-        let q: Vec<String> = cloud
-            .readings(k)
-            .iter()
-            .map(|v| format!("{}", v / scale))
-            .collect();
-        let t = cloud.tips_m[k];
-        write!(s, "{},{},{},{},{},", k + 1, q.join(","), t.x, t.y, t.z)?;
-        if markers {
-            let m = cloud.markers_m[k];
-            write!(s, "{},{},{},", m.x, m.y, m.z)?;
-        }
-        writeln!(
-            s,
-            "{},{},{},{},{}",
-            stop_name(cloud.stop[k]),
-            cloud.residual_m[k],
-            cloud.retry_check_m[k],
-            cloud.status[k].name(),
-            cloud.passes[k]
-        )?;
-    }
-    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
-}
-
-fn write_obj(hull: &Hull, name: &str, path: &Path) -> anyhow::Result<()> {
-    let mut s = format!(
-        "# convex hull of the reachable tips of {name} (m); volume {:e} m^3\n",
-        hull.volume_m3
-    );
-    for v in &hull.vertices {
-        writeln!(s, "v {} {} {}", v.x, v.y, v.z)?;
-    }
-    for t in &hull.triangles {
-        writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
-    }
-    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
 }
 
 /// What is drawn over the cloud.

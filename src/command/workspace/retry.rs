@@ -58,6 +58,9 @@ pub(super) struct Outcome {
     pub(super) check_m: f64,
     /// `max_i |G_i|` of the last solve (m; [`crate::tendons::TendonReport::residual_m`]).
     pub(super) residual_m: f64,
+    /// The fold test's verdict on a failed first pass, and its rod passes.
+    pub(super) fold: Option<super::FoldClass>,
+    pub(super) fold_passes: u32,
 }
 
 impl Outcome {
@@ -71,6 +74,8 @@ impl Outcome {
             marker: nan,
             check_m: f64::NAN,
             residual_m: f64::NAN,
+            fold: None,
+            fold_passes: 0,
         }
     }
 }

@@ -1,6 +1,7 @@
 //! Solving the sampled readings in warm chains, in parallel (module docs of
 //! [`super`]).
 
+use super::fold::fold_test;
 use super::retry::{ok, solve_status, tip_and_marker, Outcome, RetryPass};
 use super::sequence::{nearest_neighbour_order, nth_prime, radical_inverse};
 use super::{SampleStatus, WorkspaceCloud, WorkspaceSettings};
@@ -131,6 +132,13 @@ impl Shared<'_> {
             o.work = work;
             if start_ok {
                 o.residual_m = ws.report().residual_m;
+            }
+            if settings.fold_test && start_ok && !status.is_solved() {
+                // from the chain's last converged readings (`ws`'s warm state once
+                // the failed solve is rolled back), on a copy of `ws`
+                let t = fold_test(&ws, &from, q, &self.retry_settings);
+                o.fold = Some(t.class);
+                o.fold_passes = t.passes;
             }
             if status.is_solved() {
                 (o.tip, o.marker) = tip_and_marker(&mut ws, settings.marker_offset_m);
@@ -299,7 +307,12 @@ pub fn sample_workspace(
     let mut passes = vec![0u32; n];
     let mut retry_check_m = vec![f64::NAN; n];
     let mut residual_m = vec![f64::NAN; n];
+    let mut fold = vec![None; n];
+    let mut fold_passes = vec![0u32; n];
     for (k, o) in results {
+        // (a sample the retry pass solved keeps no verdict)
+        fold[k] = o.fold.filter(|_| !o.status.is_solved());
+        fold_passes[k] = o.fold_passes;
         tips_m[k] = o.tip;
         markers_m[k] = o.marker;
         status[k] = o.status;
@@ -321,5 +334,7 @@ pub fn sample_workspace(
         passes,
         residual_m,
         retry_check_m,
+        fold,
+        fold_passes,
     })
 }
