@@ -181,7 +181,10 @@ impl IkSolver {
     /// `IkSettings`): `objective` the secondary objective that chooses among the
     /// solutions (`closest`: readings closest to the call's start, `least_pull`:
     /// least total pull, `least_tension`: least sum of squared tensions);
-    /// `secondary_weight` its weight (>= 0, dimensionless, 1e-6); `tolerance_m` a tip
+    /// `secondary_weight` its weight (>= 0, dimensionless, 1e-6); `rest_weight` the
+    /// weight of the rest term that draws the readings toward zero within the
+    /// redundancy so a long warm chain does not drift (>= 0, 1e-3; 0 turns it off);
+    /// `tolerance_m` a tip
     /// within it is reached (1e-5 m); `angle_tolerance_rad` the same for a direction
     /// (1e-3); `direction_weight_m` a direction error of 1 rad counts as this much
     /// position error (0.01 m); `trust_radius_m` the first step's largest reading
@@ -195,6 +198,7 @@ impl IkSolver {
         secondary_weight = None,
         tolerance_m = None,
         angle_tolerance_rad = None,
+        rest_weight = None,
         direction_weight_m = None,
         trust_radius_m = None,
         max_iterations = None,
@@ -208,6 +212,7 @@ impl IkSolver {
         secondary_weight: Option<f64>,
         tolerance_m: Option<f64>,
         angle_tolerance_rad: Option<f64>,
+        rest_weight: Option<f64>,
         direction_weight_m: Option<f64>,
         trust_radius_m: Option<f64>,
         max_iterations: Option<usize>,
@@ -219,6 +224,7 @@ impl IkSolver {
             secondary_weight: secondary_weight.unwrap_or(d.secondary_weight),
             tolerance_m: tolerance_m.unwrap_or(d.tolerance_m),
             angle_tolerance_rad: angle_tolerance_rad.unwrap_or(d.angle_tolerance_rad),
+            rest_weight: rest_weight.unwrap_or(d.rest_weight),
             direction_weight_m: direction_weight_m.unwrap_or(d.direction_weight_m),
             trust_radius_m: trust_radius_m.unwrap_or(d.trust_radius_m),
             max_iterations: max_iterations.unwrap_or(d.max_iterations),
@@ -299,6 +305,7 @@ impl IkSolver {
         let d = PyDict::new(py);
         d.set_item("objective", s.objective.name())?;
         d.set_item("secondary_weight", s.secondary_weight)?;
+        d.set_item("rest_weight", s.rest_weight)?;
         d.set_item("tolerance_m", s.tolerance_m)?;
         d.set_item("angle_tolerance_rad", s.angle_tolerance_rad)?;
         d.set_item("direction_weight_m", s.direction_weight_m)?;

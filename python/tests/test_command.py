@@ -170,6 +170,11 @@ def test_bad_settings_name_the_field(ftdcr):
     assert e.value.field == "ik.objective"
     ik = cablesense.IkSolver(ftdcr, max_iterations=50)
     assert ik.settings["max_iterations"] == 50
+    assert ik.settings["rest_weight"] == 1e-3
+    with pytest.raises(cablesense.SceneError) as e:
+        cablesense.IkSolver(ftdcr, rest_weight=-1.0)
+    assert e.value.field == "ik.rest_weight"
+    assert cablesense.IkSolver(ftdcr, rest_weight=0.0).settings["rest_weight"] == 0.0
     with pytest.raises(cablesense.SceneError) as e:
         ik.ik([0.0, 0.0, 0.18], secondary_weight=-1.0)
     assert e.value.field == "ik.secondary_weight"

@@ -247,6 +247,7 @@ class IkSolver:
         secondary_weight: Optional[float] = None,
         tolerance_m: Optional[float] = None,
         angle_tolerance_rad: Optional[float] = None,
+        rest_weight: Optional[float] = None,
         direction_weight_m: Optional[float] = None,
         trust_radius_m: Optional[float] = None,
         max_iterations: Optional[int] = None,
