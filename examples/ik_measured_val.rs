@@ -11,13 +11,14 @@
 //! from the last reached row's readings, and a row ending out of budget or more
 //! than 0.5 mm away solved once more from zero readings, the better end kept;
 //! inside `[robot.limits]`. `plain` as the second argument runs the plain warm
-//! chain instead (each row from the previous row's end, whatever it was). Readings
-//! are taken as recorded (no time offset or backlash conditioning), so the forward
-//! figure is the raw-readings one. Every row is counted (a row whose forward solve
+//! chain instead (each row from the previous row's end, whatever it was). The
+//! recorded readings are conditioned as `track` conditions them (the scene's
+//! `[readings]` time offset and backlash, row to row), and the IK readings are
+//! compared with those conditioned readings (what reaches the tendons). Every row is counted (a row whose forward solve
 //! at the recorded readings fails would be reported, not dropped).
 //!
 //! `cargo run --release --example ik_measured_val [ROWS [plain]]`
-use cablesense::calibrate::RigidTransform;
+use cablesense::calibrate::{Conditioning, ReadingsHistory, RigidTransform};
 use cablesense::command::ik::{IkChain, IkStart};
 use cablesense::command::{IkSettings, IkStatus, IkTarget, IkWorkspace};
 use cablesense::nalgebra::Vector3;
@@ -42,6 +43,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let offset = Vector3::from(cal.marker_offset_m);
     let mut tw = scene.tendon_workspace()?;
     let mut parser = scene.readings_parser(&tw);
+    let spec = scene.readings.clone().unwrap_or_default();
+    let mut history = ReadingsHistory::new(Conditioning::from_spec(Some(&spec)));
     let plain = std::env::args().nth(2).is_some_and(|a| a == "plain");
     let mut ik = IkChain::new(IkWorkspace::from_scene(&scene, IkSettings::default())?);
     let mut plain_ik = IkWorkspace::from_scene(&scene, IkSettings::default())?;
@@ -61,7 +64,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             skipped += 1;
             continue;
         };
-        if !tw.solve_readings(&r.readings_m)?.status.is_converged() {
+        let q_rec = history
+            .push(r.t_s, &r.readings_m, &spec.time_column)?
+            .to_vec();
+        if !tw.solve_readings(&q_rec)?.status.is_converged() {
             skipped += 1;
             continue;
         }
@@ -93,10 +99,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         reach.push(rep.distance_m);
         let d: f64 = q
             .iter()
-            .zip(&r.readings_m)
+            .zip(&q_rec)
             .map(|(a, b)| (a - b) * (a - b))
             .sum::<f64>();
-        dq.push((d / r.readings_m.len() as f64).sqrt());
+        dq.push((d / q_rec.len() as f64).sqrt());
     }
     let n = fwd.len();
     let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
@@ -120,7 +126,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     println!(
-        "forward error at the recorded readings (mm): RMSE {:.3} raw, {:.3} mean offset removed; median {:.3}, 95 % {:.3}, max {:.3}",
+        "forward error at the recorded readings, conditioned (mm): RMSE {:.3} raw, {:.3} mean offset removed; median {:.3}, 95 % {:.3}, max {:.3}",
         rms(&fwd) * 1e3,
         rms(&centred) * 1e3,
         pct(&fwd, 0.5) * 1e3,
