@@ -29,33 +29,13 @@ use cablesense::Scene;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+#[path = "common/walk.rs"]
+mod walk;
+
 /// Solve `q` from `start`; converged or not.
 fn solves(w: &mut TendonWorkspace, q: &[f64]) -> bool {
     w.solve_readings_from(q, Start::Warm)
         .is_ok_and(|r| r.status.is_converged())
-}
-
-/// Follow the straight path from `from` to `to` by adaptive steps (a step that
-/// fails is halved, down to `1/2560` of the way; one that converges doubled, up to
-/// `1/40`): the fraction of the way reached (1 at the end).
-fn path(w: &mut TendonWorkspace, from: &[f64], to: &[f64]) -> f64 {
-    let (mut a, mut h) = (0.0f64, 1.0 / 40.0);
-    let mut x = from.to_vec();
-    while a < 1.0 {
-        let b = (a + h).min(1.0);
-        for ((x, f), t) in x.iter_mut().zip(from).zip(to) {
-            *x = f + b * (t - f);
-        }
-        if solves(w, &x) {
-            a = b;
-            h = (2.0 * h).min(1.0 / 40.0);
-        } else if h > 1.0 / 2560.0 {
-            h *= 0.5;
-        } else {
-            break;
-        }
-    }
-    a
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -131,7 +111,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             // the rolled-back one), unbudgeted, steps down to 1/2560 of the way
             let mut w = ws.clone();
             w.set_tendon_settings(*full.tendon_settings())?;
-            let reached = path(&mut w, &from, &q);
+            let reached = walk::walk(&mut w, &from, &q, |_, _, _| {});
             let budget_out = max_passes > 0 && r.forward_solves >= max_passes;
             let class = if budget_out && reached >= 1.0 {
                 "budget out (unbudgeted steps reach it)"
@@ -191,7 +171,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let q = q_of(k);
         let zeros = vec![0.0; p];
         let mut w = full.clone();
-        let reached = path(&mut w, &zeros, &q);
+        let reached = walk::walk(&mut w, &zeros, &q, |_, _, _| {});
         straight += usize::from(reached >= 1.0);
         let r = *w.report();
         // the last converged point's state (a failed solve is rolled back)
@@ -232,7 +212,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let next: Vec<f64> = (0..p)
                     .map(|i| if mask[i] { q[i] } else { cur[i] })
                     .collect();
-                let ok = path(&mut w, &cur, &next) >= 1.0;
+                let ok = walk::walk(&mut w, &cur, &next, |_, _, _| {}) >= 1.0;
                 cur = next;
                 ok
             });

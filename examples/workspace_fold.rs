@@ -10,15 +10,17 @@
 //! (`cablesense::tendons::FoldProbe`), its determinant sign and the tangent's size.
 
 use cablesense::command::workspace::{fold_test, halton, nearest_neighbour_order};
-use cablesense::statics::Start;
 use cablesense::tendons::{FoldPoint, FoldProbe, TendonWorkspace};
 use cablesense::Scene;
+
+#[path = "common/walk.rs"]
+mod walk;
 
 /// One converged point of a probed path: the fraction of the way and the test.
 type Seen = (f64, FoldPoint);
 
 /// The straight path from `from` to `to` by adaptive steps (1/40 down to 1/2560 of
-/// the way, as `examples/workspace_failures.rs`), the fold test at every converged
+/// the way, `common/walk.rs`), the fold test at every converged
 /// point (direction `to - from`).
 fn probed_path(
     w: &mut TendonWorkspace,
@@ -31,28 +33,11 @@ fn probed_path(
     if let Some(f) = probe.measure(w, from, &dir) {
         seen.push((0.0, f));
     }
-    let (mut a, mut h) = (0.0f64, 1.0 / 40.0);
-    let mut x = from.to_vec();
-    while a < 1.0 {
-        let b = (a + h).min(1.0);
-        for ((x, f), t) in x.iter_mut().zip(from).zip(to) {
-            *x = f + b * (t - f);
+    walk::walk(w, from, to, |w, a, x| {
+        if let Some(f) = probe.measure(w, x, &dir) {
+            seen.push((a, f));
         }
-        let ok = w
-            .solve_readings_from(&x, Start::Warm)
-            .is_ok_and(|r| r.status.is_converged());
-        if ok {
-            a = b;
-            h = (2.0 * h).min(1.0 / 40.0);
-            if let Some(f) = probe.measure(w, &x, &dir) {
-                seen.push((a, f));
-            }
-        } else if h > 1.0 / 2560.0 {
-            h *= 0.5;
-        } else {
-            break;
-        }
-    }
+    });
     seen
 }
 

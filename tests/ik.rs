@@ -14,6 +14,8 @@ use proptest::test_runner::FileFailurePersistence;
 mod boundary;
 #[path = "ik_budget.rs"]
 mod budget;
+#[path = "ik_rest.rs"]
+mod rest;
 
 const FTDCR: &str = "data/calibration/ftdcr_v4_calibrated.toml";
 const DARU: &str = "data/calibration/daru_calibrated.toml";
